@@ -1,0 +1,1 @@
+"""Math and conventions without GL: parameterizations, SH, BRDFs, transforms."""

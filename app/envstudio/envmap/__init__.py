@@ -1,0 +1,1 @@
+"""Environment representations on the GPU: cube maps, conversions, mip chains."""

@@ -1,0 +1,1 @@
+"""OpenGL plumbing: contexts, shader loading, render targets, timers, GPU meshes."""

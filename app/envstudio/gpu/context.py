@@ -1,0 +1,41 @@
+"""OpenGL context creation for headless work (EGL) with a clear error when impossible."""
+
+from __future__ import annotations
+
+import moderngl
+
+from envstudio.errors import ContextError
+
+REQUIRED_VERSION = 330
+
+
+def create_headless_context() -> moderngl.Context:
+    """Create a standalone OpenGL 3.3+ core context through EGL (no display needed).
+
+    On a machine without a GPU this is Mesa's llvmpipe.
+
+    Raises
+    ------
+    ContextError
+        If EGL or a 3.3 context is unavailable; the message says what to install.
+    """
+    try:
+        ctx = moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_VERSION)
+    except Exception as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ContextError(
+            f"no OpenGL {REQUIRED_VERSION // 100}.{REQUIRED_VERSION % 100 // 10} context through "
+            f"EGL ({first}); install libegl1 libegl-mesa0 libgl1-mesa-dri or a GPU driver"
+        ) from None
+    return ctx
+
+
+def is_software_renderer(ctx: moderngl.Context) -> bool:
+    """True for software rasterisers (llvmpipe, softpipe, swrast) whose timer queries lie."""
+    renderer = ctx.info.get("GL_RENDERER", "").lower()
+    return any(name in renderer for name in ("llvmpipe", "softpipe", "swrast", "software"))
+
+
+def describe(ctx: moderngl.Context) -> str:
+    """One line naming the renderer and GL version."""
+    return f"{ctx.info.get('GL_RENDERER', '?')} | {ctx.info.get('GL_VERSION', '?')}"

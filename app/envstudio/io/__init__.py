@@ -1,0 +1,1 @@
+"""Files in and out: images (OpenImageIO), meshes (trimesh), scene files, atomic writes."""

@@ -1,0 +1,1 @@
+"""Frame composition shared by the window, headless render and benchmark."""

@@ -1,0 +1,1 @@
+"""The common scene graph: plain data, no GL."""

@@ -1,0 +1,1 @@
+"""The moderngl-window + imgui-bundle desktop application."""

@@ -1,0 +1,31 @@
+"""Shared fixtures. GL tests never skip: if no context can be made, they fail and say why."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from envstudio.gpu.context import create_headless_context
+from envstudio.gpu.programs import ProgramLibrary
+
+
+@pytest.fixture(autouse=True)
+def _strict_numpy():
+    with np.errstate(all="raise"):
+        yield
+
+
+@pytest.fixture
+def gl_ctx():
+    """A fresh headless EGL context per test (llvmpipe on machines without a GPU)."""
+    ctx = create_headless_context()
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture
+def programs(gl_ctx):
+    """The program library of the test's context."""
+    library = ProgramLibrary(gl_ctx)
+    yield library
+    library.release()
