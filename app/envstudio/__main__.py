@@ -1,0 +1,7 @@
+"""``python -m envstudio``."""
+
+import sys
+
+from envstudio.cli import main
+
+sys.exit(main())

@@ -1,0 +1,91 @@
+"""The ``envstudio`` command: view (default), render, methods, bench.
+
+Usage errors print one line and exit with status 2; nothing prints a traceback
+for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from envstudio.errors import ParameterError, UserError
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (exit status 2)."""
+
+    def error(self, message: str):
+        raise ParameterError(f"{self.prog}: {message}")
+
+
+def _add_scene_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scene", help="shipped scene name (studio, room) or a TOML scene file")
+    parser.add_argument("--env", help="lat-long environment (.exr or .hdr), replaces the scene's")
+    parser.add_argument("--mesh", help="mesh file (OBJ, PLY, STL, OFF, GLB), replaces the reflector")
+
+
+def _add_param_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="method or display parameter (repeatable), e.g. lod_bias=2.3")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every subcommand."""
+    parser = _Parser(prog="envstudio", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+
+    view = sub.add_parser("view", help="open the viewer window (the default)")
+    _add_scene_options(view)
+    view.add_argument("--method", help="method shown first")
+    view.add_argument("--frames", type=int, default=0,
+                      help="quit after this many frames (0: run until closed)")
+    view.add_argument("--screenshot", help="save a screenshot (with the UI) before quitting")
+    view.add_argument("--cycle-methods", action="store_true",
+                      help="switch to the next method every few frames (smoke tests)")
+
+    render = sub.add_parser("render", help="render one frame headless (EGL)")
+    _add_scene_options(render)
+    render.add_argument("--method", default="mirror", help="method name (envstudio methods)")
+    _add_param_option(render)
+    render.add_argument("--camera", help="AZIMUTH,ELEVATION,DISTANCE in degrees and scene units")
+    render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default 512x512)")
+    render.add_argument("-o", "--output", required=True, help="OUT.png (as displayed) or OUT.exr")
+
+    methods = sub.add_parser("methods", help="list the methods and their parameters")
+    methods.add_argument("--json", action="store_true", help="machine-readable output")
+
+    bench = sub.add_parser("bench", help="time every method per frame and per pass")
+    _add_scene_options(bench)
+    bench.add_argument("--methods", help="comma-separated method names (default: all)")
+    bench.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT (default 1280x720)")
+    bench.add_argument("--frames", type=int, default=60, help="measured frames per method")
+    bench.add_argument("--warmup", type=int, default=5, help="unmeasured frames per method")
+    bench.add_argument("--triangles", type=int, default=0,
+                       help="subdivide the reflector until it has at least this many triangles")
+    _add_param_option(bench)
+    bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point; returns the exit status."""
+    try:
+        args = build_parser().parse_args(argv)
+        command = args.command or "view"
+        if args.command is None:
+            args = build_parser().parse_args(["view", *(argv or sys.argv[1:])])
+        from envstudio import commands
+
+        return getattr(commands, f"run_{command}")(args) or 0
+    except UserError as exc:
+        print(f"envstudio: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("envstudio: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,119 @@
+"""What each ``envstudio`` subcommand does (argument parsing lives in :mod:`envstudio.cli`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from envstudio.errors import ParameterError
+from envstudio.io.atomic import check_output_path, write_text_atomic
+from envstudio.io.images import write_image
+from envstudio.methods.base import Method, available_methods, method_class
+from envstudio.methods.parameters import parse_assignments
+from envstudio.render.display import DISPLAY_PARAMETERS
+from envstudio.render.session import RenderSession
+from envstudio.scene.graph import Scene
+from envstudio.scene_setup import build_scene, parse_camera, parse_size
+
+_DISPLAY_NAMES = tuple(p.name for p in DISPLAY_PARAMETERS)
+
+
+def apply_params(session: RenderSession, method: Method, assignments: list[str]) -> None:
+    """Apply ``name=value`` strings to the method's or the display's parameters."""
+    for name, value in parse_assignments(assignments).items():
+        if name in method.values:
+            method.values[name] = value
+        elif name in _DISPLAY_NAMES:
+            session.renderer.display[name] = value
+        else:
+            own = ", ".join(p.name for p in method.values) or "none"
+            raise ParameterError(
+                f"unknown parameter {name!r} for method {method.name} "
+                f"(method: {own}; display: {', '.join(_DISPLAY_NAMES)})"
+            )
+
+
+def _scene(args: argparse.Namespace) -> Scene:
+    return build_scene(args.scene, args.env, args.mesh)
+
+
+def run_render(args: argparse.Namespace) -> int:
+    """``envstudio render``: one frame through EGL to PNG (as displayed) or EXR (linear)."""
+    size = parse_size(args.size)
+    output = check_output_path(args.output)
+    if output.suffix.lower() not in (".png", ".exr"):
+        raise ParameterError(f"-o {output}: expected a .png or .exr file name")
+    method_class(args.method)
+    camera = parse_camera(args.camera) if args.camera else None
+    scene = _scene(args)
+    session = RenderSession(scene)
+    try:
+        method = session.method(args.method)
+        apply_params(session, method, args.param)
+        if camera:
+            session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+        stats = session.render_offscreen(method, size)
+        pixels = session.read_hdr() if output.suffix.lower() == ".exr" else session.read_ldr()
+        write_image(output, pixels)
+    finally:
+        session.release()
+    print(f"{output}: {args.method} {size[0]}x{size[1]} in {stats.total_ms:.1f} ms ({stats.clock})")
+    return 0
+
+
+def run_methods(args: argparse.Namespace) -> int:
+    """``envstudio methods``: every method with its declared parameters."""
+    described = [cls.describe() for cls in available_methods().values()]
+    if args.json:
+        print(json.dumps({"methods": described,
+                          "display": [p.describe() for p in DISPLAY_PARAMETERS]}, indent=2))
+        return 0
+    for entry in described:
+        print(f"{entry['name']}: {entry['title']} — {entry['summary']}")
+        for p in entry["parameters"]:
+            rng = f" [{p['minimum']:g}, {p['maximum']:g}]" if "minimum" in p else ""
+            choices = f" {{{', '.join(p['choices'])}}}" if "choices" in p else ""
+            unit = f" {p['unit']}" if p.get("unit") else ""
+            print(f"  {p['name']} ({p['kind']}{rng}{choices}, default {p['default']}{unit}): "
+                  f"{p.get('help', '')}")
+    return 0
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    """``envstudio bench``: per-method frame and pass times."""
+    from envstudio.render.bench import format_report, run_bench as bench
+
+    size = parse_size(args.size)
+    names = args.methods.split(",") if args.methods else list(available_methods())
+    for name in names:
+        method_class(name)
+    if args.frames < 1 or args.warmup < 0:
+        raise ParameterError("--frames must be >= 1 and --warmup >= 0")
+    json_out = check_output_path(args.json_out) if args.json_out else None
+    scene = _scene(args)
+    if args.triangles:
+        from envstudio.scene_setup import subdivide_reflectors
+
+        subdivide_reflectors(scene, args.triangles)
+    session = RenderSession(scene)
+    try:
+        for name in names:
+            apply_params(session, session.method(name), [
+                a for a in args.param if a.partition("=")[0] in session.method(name).values
+                or a.partition("=")[0] in _DISPLAY_NAMES])
+        report = bench(session, names, size, args.frames, args.warmup,
+                       progress=sys.stderr.isatty())
+    finally:
+        session.release()
+    print(format_report(report))
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+    return 0
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """``envstudio view``: the desktop viewer."""
+    from envstudio.ui.app import run_viewer
+
+    return run_viewer(args)

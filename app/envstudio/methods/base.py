@@ -1,0 +1,88 @@
+"""The renderer contract (DESIGN.md): methods, their declared parameters, the registry.
+
+A method draws the scene's reflectors into the bound HDR framebuffer (linear
+radiance). It owns its GPU resources, prepares lazily (what depends on the
+environment is rebuilt only when :attr:`GpuScene.environment_revision`
+changes), times each pass with the frame's :class:`PassTimer`, and sets its
+parameters as uniforms: a parameter change never recompiles unless the
+parameter is declared ``rebuild=True``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import moderngl
+
+from envstudio.errors import ParameterError
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.methods.context import FrameInputs
+from envstudio.methods.parameters import Parameter, ParameterValues
+
+_REGISTRY: dict[str, type[Method]] = {}
+
+
+class Method(ABC):
+    """Base class of every renderer.
+
+    Subclasses set :attr:`name`, :attr:`title`, :attr:`summary`, declare
+    :attr:`parameters`, and implement :meth:`render`.
+
+    Parameters
+    ----------
+    ctx
+        Context the method renders with.
+    programs
+        Shared program cache of that context.
+    """
+
+    name: ClassVar[str]
+    title: ClassVar[str]
+    summary: ClassVar[str]
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
+
+    def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary):
+        self.ctx = ctx
+        self.programs = programs
+        self.values = ParameterValues(self.parameters)
+
+    @abstractmethod
+    def render(self, frame: FrameInputs) -> None:
+        """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
+
+    def release(self) -> None:
+        """Free GPU resources the method owns; safe to call twice."""
+
+    @classmethod
+    def describe(cls) -> dict:
+        """JSON-ready description: name, title, summary, parameters."""
+        return {
+            "name": cls.name,
+            "title": cls.title,
+            "summary": cls.summary,
+            "parameters": [p.describe() for p in cls.parameters],
+        }
+
+
+def register(cls: type[Method]) -> type[Method]:
+    """Class decorator adding a method to the registry under ``cls.name``."""
+    if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
+        raise ValueError(f"method {cls.name!r} registered twice")
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def available_methods() -> dict[str, type[Method]]:
+    """Registered methods by name, in registration order."""
+    import envstudio.methods  # noqa: F401  (registers the shipped methods)
+
+    return dict(_REGISTRY)
+
+
+def method_class(name: str) -> type[Method]:
+    """The registered method called ``name``; raises ParameterError if unknown."""
+    methods = available_methods()
+    if name not in methods:
+        raise ParameterError(f"unknown method {name!r} (available: {', '.join(methods)})")
+    return methods[name]

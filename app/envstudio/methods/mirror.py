@@ -1,0 +1,43 @@
+"""Method ``mirror``: Blinn–Newell mirror reflection with seed 000 eq. 8 and Schlick Fresnel."""
+
+from __future__ import annotations
+
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.base import Method, register
+from envstudio.methods.context import FrameInputs
+from envstudio.methods.parameters import Parameter
+
+
+@register
+class MirrorMethod(Method):
+    """Perfect mirror from the environment cube map, blended with a diffuse term by Fresnel.
+
+    L_o = (1 − F) · k_d · L_blur(n) + F · L_env(r), with Schlick F(r·n) of f_λ
+    (seed 000 eq. 8, section 5.2) and L_blur the cube map's 2×2-per-face mip
+    level along the normal, a stand-in for irradiance/π without SH.
+    """
+
+    name = "mirror"
+    title = "Mirror (Blinn–Newell)"
+    summary = "Mirror reflection from the cube map, Schlick Fresnel blend with a crude diffuse term."
+    parameters = (
+        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ",
+                  "Schlick reflectance at normal incidence (1 = perfect mirror)."),
+        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo of the (1 − F) term."),
+    )
+
+    def render(self, frame: FrameInputs) -> None:
+        program = self.programs.get("mirror/mirror.glsl")
+        frame.scene.cube.use(location=0)
+        set_uniform(program, "u_environment", 0)
+        set_uniform(program, "u_camera_position", frame.camera_position)
+        set_uniform(program, "u_fresnel", self.values["fresnel"])
+        set_uniform(program, "u_kd", self.values["kd"])
+        set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
+        with frame.timer.measure("mirror"):
+            for gpu_node in frame.scene.reflectors():
+                set_uniform(program, "u_view", frame.view)
+                set_uniform(program, "u_projection", frame.projection)
+                set_uniform(program, "u_model", gpu_node.model)
+                set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                gpu_node.mesh.render(program)

@@ -1,0 +1,115 @@
+"""A rendering session: context, program cache, GPU scene, frame renderer and methods.
+
+The window and the headless commands both drive a :class:`RenderSession`;
+the window passes its own context and framebuffer, headless use makes an EGL
+context and renders into an offscreen 8-bit target.
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.gpu.context import create_headless_context
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.methods.base import Method, available_methods, method_class
+from envstudio.methods.context import GpuScene
+from envstudio.render.frame import FrameRenderer, FrameStats
+from envstudio.scene.graph import Scene
+
+
+def material_values(scene: Scene) -> dict[str, float]:
+    """Method parameter values implied by the first reflector's material."""
+    reflectors = scene.reflectors()
+    if not reflectors:
+        return {}
+    material = reflectors[0].material
+    return {
+        "kd": float(np.mean(material.kd)),
+        "fresnel": material.fresnel,
+        "phong_exponent": material.phong_exponent,
+    }
+
+
+class RenderSession:
+    """Everything needed to render a scene with any registered method.
+
+    Parameters
+    ----------
+    scene
+        The scene to show.
+    ctx
+        An existing context (the window's); None makes a headless EGL context.
+    cube_size
+        Environment cube map size.
+    """
+
+    def __init__(self, scene: Scene, ctx: moderngl.Context | None = None, cube_size: int = 256):
+        self._owns_ctx = ctx is None
+        self.ctx = ctx or create_headless_context()
+        self.programs = ProgramLibrary(self.ctx)
+        self.gpu_scene = GpuScene(self.ctx, self.programs, scene, cube_size)
+        self.renderer = FrameRenderer(self.ctx, self.programs)
+        self.camera = scene.camera
+        self._methods: dict[str, Method] = {}
+        self._ldr: moderngl.Framebuffer | None = None
+
+    @property
+    def scene(self) -> Scene:
+        """The scene being shown."""
+        return self.gpu_scene.scene
+
+    def method(self, name: str) -> Method:
+        """The instance of method ``name`` (created on first use with the scene's material)."""
+        if name not in self._methods:
+            method = method_class(name)(self.ctx, self.programs)
+            method.values.update(material_values(self.scene), ignore_unknown=True)
+            self._methods[name] = method
+        return self._methods[name]
+
+    def method_names(self) -> list[str]:
+        """Registered method names."""
+        return list(available_methods())
+
+    def render_offscreen(self, method: str | Method, size: tuple[int, int]) -> FrameStats:
+        """Render one frame into the offscreen 8-bit target of ``size``."""
+        method = self.method(method) if isinstance(method, str) else method
+        target = self._ldr_target(size)
+        return self.renderer.render(self.gpu_scene, method, self.camera, size, target)
+
+    def read_ldr(self) -> npt.NDArray[np.uint8]:
+        """(h, w, 3) uint8 of the last offscreen frame as displayed, row 0 at the top."""
+        w, h = self._ldr.size
+        data = np.frombuffer(self._ldr.read(components=3), dtype=np.uint8)
+        return np.ascontiguousarray(data.reshape(h, w, 3)[::-1])
+
+    def read_hdr(self) -> npt.NDArray[np.float32]:
+        """(h, w, 3) float32 linear radiance of the last frame, row 0 at the top."""
+        return self.renderer.read_hdr()
+
+    def _ldr_target(self, size: tuple[int, int]) -> moderngl.Framebuffer:
+        if self._ldr is None or self._ldr.size != tuple(size):
+            if self._ldr is not None:
+                for attachment in self._ldr.color_attachments:
+                    attachment.release()
+                self._ldr.release()
+            self._ldr = self.ctx.framebuffer([self.ctx.texture(size, 4)])
+        return self._ldr
+
+    def release(self) -> None:
+        """Free every GPU resource (and the context if this session made it); safe twice."""
+        for method in self._methods.values():
+            method.release()
+        self._methods.clear()
+        if self._ldr is not None:
+            for attachment in self._ldr.color_attachments:
+                attachment.release()
+            self._ldr.release()
+            self._ldr = None
+        self.renderer.release()
+        self.gpu_scene.release()
+        self.programs.release()
+        if self._owns_ctx and self.ctx is not None:
+            self.ctx.release()
+            self.ctx = None

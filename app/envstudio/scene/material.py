@@ -1,0 +1,25 @@
+"""Materials of reflectors and local objects (plain data)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class Material:
+    """Diffuse + glossy material of seed 000 eq. 8.
+
+    Attributes
+    ----------
+    kd : (3,) tuple of float
+        Diffuse albedo k_d in [0, 1] per RGB channel (seed 000 eq. 2).
+    fresnel : float
+        f_λ, Schlick reflectance at normal incidence in [0, 1] (seed 000 section 5.2).
+    phong_exponent : float
+        Phong lobe exponent N (seed 000 eq. 5–7).
+    """
+
+    kd: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    fresnel: float = 1.0
+    phong_exponent: float = 200.0
+    extra: dict[str, float] = field(default_factory=dict)

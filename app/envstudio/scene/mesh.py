@@ -1,0 +1,66 @@
+"""Triangle meshes as plain arrays (no GL)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+
+@dataclass
+class MeshData:
+    """An indexed triangle mesh.
+
+    Attributes
+    ----------
+    positions : (n, 3) float32
+        Vertex positions in the mesh's own units.
+    normals : (n, 3) float32
+        Unit vertex normals.
+    indices : (m, 3) uint32
+        Counter-clockwise triangles.
+    name : str
+        Where the mesh came from (file name or primitive), for messages.
+    """
+
+    positions: npt.NDArray[np.float32]
+    normals: npt.NDArray[np.float32]
+    indices: npt.NDArray[np.uint32]
+    name: str = "mesh"
+
+    def __post_init__(self):
+        self.positions = np.ascontiguousarray(self.positions, dtype=np.float32).reshape(-1, 3)
+        self.normals = np.ascontiguousarray(self.normals, dtype=np.float32).reshape(-1, 3)
+        self.indices = np.ascontiguousarray(self.indices, dtype=np.uint32).reshape(-1, 3)
+        if len(self.normals) != len(self.positions):
+            raise ValueError(f"{self.name}: {len(self.normals)} normals for {len(self.positions)}")
+
+    @property
+    def triangle_count(self) -> int:
+        """Number of triangles."""
+        return len(self.indices)
+
+    def bounds(self) -> npt.NDArray[np.float32]:
+        """(2, 3) minimum and maximum corner."""
+        return np.stack([self.positions.min(axis=0), self.positions.max(axis=0)])
+
+    def tangents(self) -> npt.NDArray[np.float32]:
+        """(n, 3) unit tangents orthogonal to the normals, for anisotropic materials.
+
+        Without texture coordinates the tangent follows the direction of
+        increasing azimuth about +Y (``up × n``), falling back to +X at the poles.
+        """
+        n = self.normals.astype(np.float64)
+        t = np.cross((0.0, 1.0, 0.0), n)
+        pole = np.linalg.norm(t, axis=1) < 1e-6
+        t[pole] = np.cross(n[pole], (0.0, 0.0, 1.0))
+        return (t / np.linalg.norm(t, axis=1, keepdims=True)).astype(np.float32)
+
+    def fitted(self, radius: float = 1.0) -> MeshData:
+        """A copy centred on its bounding box and scaled into a sphere of ``radius``."""
+        lo, hi = self.bounds()
+        centre = (lo + hi) / 2
+        extent = np.linalg.norm(self.positions - centre, axis=1).max()
+        scale = radius / extent if extent > 0 else 1.0
+        return MeshData((self.positions - centre) * scale, self.normals, self.indices, self.name)

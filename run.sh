@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Set up envmap-studio on this machine (once; later runs reuse it) and run it.
+#   ./run.sh view [ARGS...]   set up, then open the viewer (default scene)
+#   ./run.sh test             set up, then ruff check, ruff format --check, pytest
+#   ./run.sh envstudio ARGS   set up, then any envstudio subcommand
+set -euo pipefail
+cd "$(dirname "$0")"
+
+DEBIAN_PACKAGES=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth)
+
+install_debian_packages() {
+    command -v dpkg-query >/dev/null || return 0
+    local missing=()
+    for pkg in "${DEBIAN_PACKAGES[@]}"; do
+        dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "ok installed" || missing+=("$pkg")
+    done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    if [ "$(id -u)" = 0 ]; then
+        echo "run.sh: installing Debian packages: ${missing[*]}" >&2
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+    else
+        echo "run.sh: missing Debian packages (install them as root): ${missing[*]}" >&2
+    fi
+}
+
+install_python_environment() {
+    [ -x .venv/bin/python ] || python3 -m venv .venv
+    local stamp
+    stamp=".venv/.installed-$(cat requirements.lock pyproject.toml | sha1sum | cut -c1-12)"
+    if [ ! -f "$stamp" ]; then
+        echo "run.sh: installing Python packages into .venv" >&2
+        .venv/bin/python -m pip install -q --upgrade pip
+        .venv/bin/python -m pip install -q -r requirements.lock
+        .venv/bin/python -m pip install -q --no-deps -e .
+        rm -f .venv/.installed-*
+        touch "$stamp"
+    fi
+}
+
+install_debian_packages
+install_python_environment
+
+command="${1:-view}"
+[ $# -gt 0 ] && shift
+case "$command" in
+    view) exec .venv/bin/envstudio view "$@" ;;
+    test)
+        .venv/bin/ruff check .
+        .venv/bin/ruff format --check .
+        exec .venv/bin/pytest -q "$@" ;;
+    envstudio) exec .venv/bin/envstudio "$@" ;;
+    *) echo "run.sh: unknown command '$command' (expected view, test or envstudio)" >&2; exit 2 ;;
+esac

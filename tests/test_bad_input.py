@@ -1,0 +1,115 @@
+"""Bad input: one line naming the file or value and what was expected, exit status 2."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from envstudio.cli import main
+from envstudio.io.images import write_image
+from envstudio.resources import asset_root
+
+BUNNY = str(asset_root() / "mesh" / "bunny.ply")
+STUDIO = str(asset_root() / "hdr" / "studio.exr")
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str]:
+    status = main(list(argv))
+    err = capsys.readouterr().err
+    return status, err
+
+
+def assert_one_line_error(status: int, err: str, *fragments: str) -> None:
+    assert status == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+@pytest.fixture
+def bad_files(tmp_path: Path) -> dict[str, Path]:
+    files = {}
+    files["missing"] = tmp_path / "missing.exr"
+    files["text"] = tmp_path / "notes.exr"
+    files["text"].write_text("this is not an image\n")
+    files["truncated"] = tmp_path / "truncated.exr"
+    files["truncated"].write_bytes(Path(STUDIO).read_bytes()[:5000])
+    files["square"] = tmp_path / "square.exr"
+    write_image(files["square"], np.ones((16, 16, 3), np.float32))
+    nan_map = np.ones((16, 32, 3), np.float32)
+    nan_map[3, 5, 1] = np.nan
+    nan_map[4, 6, 0] = np.inf
+    files["nan"] = tmp_path / "nan.exr"
+    write_image(files["nan"], nan_map)
+    files["nofaces"] = tmp_path / "points.obj"
+    files["nofaces"].write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    return files
+
+
+@pytest.mark.parametrize(
+    ("key", "fragments"),
+    [("missing", ["missing.exr", "no such file"]),
+     ("text", ["notes.exr", "not a readable image"]),
+     ("truncated", ["truncated.exr", "corrupt"]),
+     ("square", ["square.exr", "16x16", "width = 2 x height"]),
+     ("nan", ["nan.exr", "NaN or Inf", "x=5, y=3"])],
+)
+def test_bad_environment_files(capsys, tmp_path, bad_files, key, fragments):
+    status, err = run_cli(capsys, "render", "--env", str(bad_files[key]), "--mesh", BUNNY,
+                          "-o", str(tmp_path / "out.png"))
+    assert_one_line_error(status, err, *fragments)
+    assert not (tmp_path / "out.png").exists()
+
+
+def test_mesh_without_faces(capsys, tmp_path, bad_files):
+    status, err = run_cli(capsys, "render", "--mesh", str(bad_files["nofaces"]),
+                          "-o", str(tmp_path / "out.png"))
+    assert_one_line_error(status, err, "points.obj", "no faces")
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragments"),
+    [(["render", "--method", "phong", "-o", "OUT"], ["unknown method 'phong'", "mirror"]),
+     (["render", "--param", "lod_bias=2", "-o", "OUT"], ["unknown parameter 'lod_bias'", "fresnel"]),
+     (["render", "--param", "fresnel=1.5", "-o", "OUT"], ["fresnel=1.5", "[0, 1]"]),
+     (["render", "--param", "tonemap=filmic", "-o", "OUT"], ["tonemap=filmic", "aces"]),
+     (["render", "--size", "big", "-o", "OUT"], ["--size 'big'", "WIDTHxHEIGHT"]),
+     (["render", "--camera", "1,2", "-o", "OUT"], ["--camera '1,2'"]),
+     (["render", "-o", "MISSING/out.png"], ["MISSING", "does not exist"]),
+     (["render", "-o", "OUT.txt"], ["OUT.txt", ".png or .exr"]),
+     (["render", "--scene", "nowhere", "-o", "OUT"], ["nowhere", "studio"]),
+     (["bench", "--methods", "mirror,nope"], ["unknown method 'nope'"]),
+     (["render", "--bogus"], ["unrecognized arguments: --bogus"])],
+)
+def test_usage_errors(capsys, tmp_path, argv, fragments):
+    argv = [a.replace("OUT", str(tmp_path / "out.png")) if a == "OUT" else a for a in argv]
+    argv = [str(tmp_path / a) if a.startswith(("MISSING", "OUT.")) else a for a in argv]
+    status, err = run_cli(capsys, *argv)
+    assert_one_line_error(status, err, *fragments)
+
+
+def test_bad_scene_file(capsys, tmp_path):
+    scene = tmp_path / "broken.toml"
+    scene.write_text('[environment]\nfile = "hdr/studio.exr"\n[[object]]\nprimitive = "torus"\n')
+    status, err = run_cli(capsys, "render", "--scene", str(scene), "-o", str(tmp_path / "o.png"))
+    assert_one_line_error(status, err, "broken.toml", "object[0]", "primitive")
+    scene.write_text("this is = = not toml")
+    status, err = run_cli(capsys, "render", "--scene", str(scene), "-o", str(tmp_path / "o.png"))
+    assert_one_line_error(status, err, "broken.toml", "not a valid TOML")
+
+
+def test_no_egl_is_one_line_in_a_real_process(tmp_path):
+    env = dict(os.environ, __EGL_VENDOR_LIBRARY_FILENAMES=str(tmp_path / "none.json"),
+               EGL_PLATFORM="surfaceless", LIBGL_ALWAYS_SOFTWARE="1")
+    env["__EGL_VENDOR_LIBRARY_DIRS"] = str(tmp_path)
+    result = subprocess.run(
+        [sys.executable, "-m", "envstudio", "render", "--size", "32x32",
+         "-o", str(tmp_path / "x.png")], capture_output=True, text=True, env=env, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert "EGL" in result.stderr and "libegl" in result.stderr
