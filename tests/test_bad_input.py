@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import OpenImageIO as oiio
 import pytest
 
 from envstudio.cli import main
@@ -42,10 +43,13 @@ def bad_files(tmp_path: Path) -> dict[str, Path]:
     files["square"] = tmp_path / "square.exr"
     write_image(files["square"], np.ones((16, 16, 3), np.float32))
     nan_map = np.ones((16, 32, 3), np.float32)
-    nan_map[3, 5, 1] = np.nan
+    nan_map[3, 5, 0] = np.nan
     nan_map[4, 6, 0] = np.inf
     files["nan"] = tmp_path / "nan.exr"
-    write_image(files["nan"], nan_map)
+    out = oiio.ImageOutput.create(str(files["nan"]))
+    out.open(str(files["nan"]), oiio.ImageSpec(32, 16, 3, "float"))
+    out.write_image(nan_map)
+    out.close()
     files["nofaces"] = tmp_path / "points.obj"
     files["nofaces"].write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
     return files
@@ -53,38 +57,54 @@ def bad_files(tmp_path: Path) -> dict[str, Path]:
 
 @pytest.mark.parametrize(
     ("key", "fragments"),
-    [("missing", ["missing.exr", "no such file"]),
-     ("text", ["notes.exr", "not a readable image"]),
-     ("truncated", ["truncated.exr", "corrupt"]),
-     ("square", ["square.exr", "16x16", "width = 2 x height"]),
-     ("nan", ["nan.exr", "NaN or Inf", "x=5, y=3"])],
+    [
+        ("missing", ["missing.exr", "no such file"]),
+        ("text", ["notes.exr", "not a readable image"]),
+        ("truncated", ["truncated.exr", "corrupt"]),
+        ("square", ["square.exr", "16x16", "width = 2 x height"]),
+        ("nan", ["nan.exr", "2 pixels are NaN or Inf", "x=5, y=3"]),
+    ],
 )
 def test_bad_environment_files(capsys, tmp_path, bad_files, key, fragments):
-    status, err = run_cli(capsys, "render", "--env", str(bad_files[key]), "--mesh", BUNNY,
-                          "-o", str(tmp_path / "out.png"))
+    status, err = run_cli(
+        capsys,
+        "render",
+        "--env",
+        str(bad_files[key]),
+        "--mesh",
+        BUNNY,
+        "-o",
+        str(tmp_path / "out.png"),
+    )
     assert_one_line_error(status, err, *fragments)
     assert not (tmp_path / "out.png").exists()
 
 
 def test_mesh_without_faces(capsys, tmp_path, bad_files):
-    status, err = run_cli(capsys, "render", "--mesh", str(bad_files["nofaces"]),
-                          "-o", str(tmp_path / "out.png"))
+    status, err = run_cli(
+        capsys, "render", "--mesh", str(bad_files["nofaces"]), "-o", str(tmp_path / "out.png")
+    )
     assert_one_line_error(status, err, "points.obj", "no faces")
 
 
 @pytest.mark.parametrize(
     ("argv", "fragments"),
-    [(["render", "--method", "phong", "-o", "OUT"], ["unknown method 'phong'", "mirror"]),
-     (["render", "--param", "lod_bias=2", "-o", "OUT"], ["unknown parameter 'lod_bias'", "fresnel"]),
-     (["render", "--param", "fresnel=1.5", "-o", "OUT"], ["fresnel=1.5", "[0, 1]"]),
-     (["render", "--param", "tonemap=filmic", "-o", "OUT"], ["tonemap=filmic", "aces"]),
-     (["render", "--size", "big", "-o", "OUT"], ["--size 'big'", "WIDTHxHEIGHT"]),
-     (["render", "--camera", "1,2", "-o", "OUT"], ["--camera '1,2'"]),
-     (["render", "-o", "MISSING/out.png"], ["MISSING", "does not exist"]),
-     (["render", "-o", "OUT.txt"], ["OUT.txt", ".png or .exr"]),
-     (["render", "--scene", "nowhere", "-o", "OUT"], ["nowhere", "studio"]),
-     (["bench", "--methods", "mirror,nope"], ["unknown method 'nope'"]),
-     (["render", "--bogus"], ["unrecognized arguments: --bogus"])],
+    [
+        (["render", "--method", "phong", "-o", "OUT"], ["unknown method 'phong'", "mirror"]),
+        (
+            ["render", "--param", "lod_bias=2", "-o", "OUT"],
+            ["unknown parameter 'lod_bias'", "fresnel"],
+        ),
+        (["render", "--param", "fresnel=1.5", "-o", "OUT"], ["fresnel=1.5", "[0, 1]"]),
+        (["render", "--param", "tonemap=filmic", "-o", "OUT"], ["tonemap=filmic", "aces"]),
+        (["render", "--size", "big", "-o", "OUT"], ["--size 'big'", "WIDTHxHEIGHT"]),
+        (["render", "--camera", "1,2", "-o", "OUT"], ["--camera '1,2'"]),
+        (["render", "-o", "MISSING/out.png"], ["MISSING", "does not exist"]),
+        (["render", "-o", "OUT.txt"], ["OUT.txt", ".png or .exr"]),
+        (["render", "--scene", "nowhere", "-o", "OUT"], ["nowhere", "studio"]),
+        (["bench", "--methods", "mirror,nope"], ["unknown method 'nope'"]),
+        (["render", "--bogus", "-o", "OUT"], ["unrecognized arguments: --bogus"]),
+    ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):
     argv = [a.replace("OUT", str(tmp_path / "out.png")) if a == "OUT" else a for a in argv]
@@ -104,12 +124,29 @@ def test_bad_scene_file(capsys, tmp_path):
 
 
 def test_no_egl_is_one_line_in_a_real_process(tmp_path):
-    env = dict(os.environ, __EGL_VENDOR_LIBRARY_FILENAMES=str(tmp_path / "none.json"),
-               EGL_PLATFORM="surfaceless", LIBGL_ALWAYS_SOFTWARE="1")
+    env = dict(
+        os.environ,
+        __EGL_VENDOR_LIBRARY_FILENAMES=str(tmp_path / "none.json"),
+        EGL_PLATFORM="surfaceless",
+        LIBGL_ALWAYS_SOFTWARE="1",
+    )
     env["__EGL_VENDOR_LIBRARY_DIRS"] = str(tmp_path)
     result = subprocess.run(
-        [sys.executable, "-m", "envstudio", "render", "--size", "32x32",
-         "-o", str(tmp_path / "x.png")], capture_output=True, text=True, env=env, timeout=120)
+        [
+            sys.executable,
+            "-m",
+            "envstudio",
+            "render",
+            "--size",
+            "32x32",
+            "-o",
+            str(tmp_path / "x.png"),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert result.returncode == 2, result.stderr
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert "EGL" in result.stderr and "libegl" in result.stderr

@@ -8,10 +8,14 @@ from envstudio.methods.parameters import Parameter, ParameterValues, parse_assig
 
 
 def test_values_are_validated_and_converted():
-    values = ParameterValues([Parameter("lod_bias", "float", 0.0, 0.0, 10.0, "b"),
-                              Parameter("steps", "int", 4, 1, 64),
-                              Parameter("on", "bool", False),
-                              Parameter("mode", "choice", "a", choices=("a", "b"))])
+    values = ParameterValues(
+        [
+            Parameter("lod_bias", "float", 0.0, 0.0, 10.0, "b"),
+            Parameter("steps", "int", 4, 1, 64),
+            Parameter("on", "bool", False),
+            Parameter("mode", "choice", "a", choices=("a", "b")),
+        ]
+    )
     values["lod_bias"] = "2.5"
     values["steps"] = "8"
     values["on"] = "true"
@@ -24,19 +28,25 @@ def test_values_are_validated_and_converted():
 
 @pytest.mark.parametrize(
     ("name", "value", "message"),
-    [("lod_bias", "12", r"lod_bias=12: expected a number in \[0, 10\]"),
-     ("lod_bias", "abc", "lod_bias=abc: expected a number"),
-     ("lod_bias", "nan", "expected a number"),
-     ("steps", "2.5", "expected an integer"),
-     ("on", "maybe", "expected true or false"),
-     ("mode", "c", "expected one of a, b"),
-     ("nope", "1", "unknown parameter 'nope'")],
+    [
+        ("lod_bias", "12", r"lod_bias=12: expected a number in \[0, 10\]"),
+        ("lod_bias", "abc", "lod_bias=abc: expected a number"),
+        ("lod_bias", "nan", "expected a number"),
+        ("steps", "2.5", "expected an integer"),
+        ("on", "maybe", "expected true or false"),
+        ("mode", "c", "expected one of a, b"),
+        ("nope", "1", "unknown parameter 'nope'"),
+    ],
 )
 def test_bad_values_name_the_value_and_what_was_expected(name, value, message):
-    values = ParameterValues([Parameter("lod_bias", "float", 0.0, 0.0, 10.0),
-                              Parameter("steps", "int", 4, 1, 64),
-                              Parameter("on", "bool", False),
-                              Parameter("mode", "choice", "a", choices=("a", "b"))])
+    values = ParameterValues(
+        [
+            Parameter("lod_bias", "float", 0.0, 0.0, 10.0),
+            Parameter("steps", "int", 4, 1, 64),
+            Parameter("on", "bool", False),
+            Parameter("mode", "choice", "a", choices=("a", "b")),
+        ]
+    )
     with pytest.raises(ParameterError, match=message):
         values[name] = value
 

@@ -15,13 +15,17 @@ from envstudio.scene.primitives import uv_sphere
 SIZE = (96, 96)
 
 FACE_COLOURS = {  # OpenGL face order +X, -X, +Y, -Y, +Z, -Z
-    "+X": (1.0, 0.0, 0.0), "-X": (0.0, 1.0, 1.0), "+Y": (0.0, 1.0, 0.0),
-    "-Y": (1.0, 0.0, 1.0), "+Z": (0.0, 0.0, 1.0), "-Z": (1.0, 1.0, 0.0),
+    "+X": (1.0, 0.0, 0.0),
+    "-X": (0.0, 1.0, 1.0),
+    "+Y": (0.0, 1.0, 0.0),
+    "-Y": (1.0, 0.0, 1.0),
+    "+Z": (0.0, 0.0, 1.0),
+    "-Z": (1.0, 1.0, 0.0),
 }
 
 
 def six_colour_environment(height: int = 64) -> Environment:
-    d = texel_directions(2 * height, height)
+    d = texel_directions(height)
     axis = np.argmax(np.abs(d), axis=-1)
     positive = np.take_along_axis(d, axis[..., None], -1)[..., 0] > 0
     names = np.array([["-X", "+X"], ["-Y", "+Y"], ["-Z", "+Z"]])[axis, positive.astype(int)]
@@ -45,8 +49,9 @@ def render(session: RenderSession, method: str = "mirror", **params) -> np.ndarr
 def sphere_geometry(camera: OrbitCamera, size=SIZE):
     """Per-pixel hit mask, normal and view direction of a unit sphere at the origin (NumPy)."""
     w, h = size
-    inv = np.linalg.inv(camera.projection_matrix(w / h).astype(np.float64)
-                        @ camera.view_matrix().astype(np.float64))
+    inv = np.linalg.inv(
+        camera.projection_matrix(w / h).astype(np.float64) @ camera.view_matrix().astype(np.float64)
+    )
     x = (np.arange(w) + 0.5) / w * 2 - 1
     y = 1 - (np.arange(h) + 0.5) / h * 2  # row 0 at the top
     X, Y = np.meshgrid(x, y)
@@ -97,14 +102,24 @@ def test_six_colour_cube_centre_shows_face_behind_camera_and_rim_the_sides(gl_ct
     radius = (cols.max() - cols.min() + 1) / 2
 
     def at(dx: float, dy: float) -> np.ndarray:  # offsets in sphere radii, +dy up
-        return img[int(round(cy - dy * radius)), int(round(cx + dx * radius))]
+        return img[round(cy - dy * radius), round(cx + dx * radius)]
 
     r45 = np.sin(np.radians(45.0))
-    checks = {(0.0, 0.0): "+Z", (-r45, 0.0): "-X", (r45, 0.0): "+X",
-              (0.0, r45): "+Y", (0.0, -r45): "-Y", (0.985, 0.0): "-Z"}
+    checks = {
+        (0.0, 0.0): "+Z",
+        (-r45, 0.0): "-X",
+        (r45, 0.0): "+X",
+        (0.0, r45): "+Y",
+        (0.0, -r45): "-Y",
+        (0.985, 0.0): "-Z",
+    }
     for (dx, dy), face in checks.items():
-        np.testing.assert_allclose(at(dx, dy), FACE_COLOURS[face], atol=0.02,
-                                   err_msg=f"offset ({dx:.2f}, {dy:.2f}) should show {face}")
+        np.testing.assert_allclose(
+            at(dx, dy),
+            FACE_COLOURS[face],
+            atol=0.02,
+            err_msg=f"offset ({dx:.2f}, {dy:.2f}) should show {face}",
+        )
     session.release()
 
 

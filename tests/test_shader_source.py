@@ -6,15 +6,15 @@ from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import ShaderSourceError, preprocess, stages_in
 
 FILES = {
-    "prog.glsl": "#version 330 core\n#include \"common/a.glsl\"\nvoid main() {}\nlast line\n",
-    "common/a.glsl": "// a line 1\n#include \"common/b.glsl\"\nfloat a() { return 1.0; }\n",
+    "prog.glsl": '#version 330 core\n#include "common/a.glsl"\nvoid main() {}\nlast line\n',
+    "common/a.glsl": '// a line 1\n#include "common/b.glsl"\nfloat a() { return 1.0; }\n',
     "common/b.glsl": "float b() { return 2.0; }\n",
-    "cycle.glsl": "#version 330 core\n#include \"common/c1.glsl\"\n",
-    "common/c1.glsl": "#include \"common/c2.glsl\"\n",
-    "common/c2.glsl": "#include \"common/c1.glsl\"\n",
-    "twice.glsl": "#version 330 core\n#include \"common/b.glsl\"\n#include \"common/b.glsl\"\n",
+    "cycle.glsl": '#version 330 core\n#include "common/c1.glsl"\n',
+    "common/c1.glsl": '#include "common/c2.glsl"\n',
+    "common/c2.glsl": '#include "common/c1.glsl"\n',
+    "twice.glsl": '#version 330 core\n#include "common/b.glsl"\n#include "common/b.glsl"\n',
     "noversion.glsl": "void main() {}\n",
-    "missing.glsl": "#version 330 core\n#include \"common/nope.glsl\"\n",
+    "missing.glsl": '#version 330 core\n#include "common/nope.glsl"\n',
 }
 
 
@@ -65,7 +65,11 @@ def test_each_file_is_included_once():
 
 @pytest.mark.parametrize(
     ("name", "message"),
-    [("cycle.glsl", "include cycle"), ("noversion.glsl", "#version"), ("missing.glsl", "nope.glsl")],
+    [
+        ("cycle.glsl", "include cycle"),
+        ("noversion.glsl", "#version"),
+        ("missing.glsl", "nope.glsl"),
+    ],
 )
 def test_malformed_sources_raise_clear_errors(name, message):
     with pytest.raises(ShaderSourceError, match=message):
@@ -80,8 +84,11 @@ def test_unknown_stage_is_refused():
 def test_every_shipped_program_preprocesses():
     from envstudio.resources import shader_root
 
-    programs = [p for p in shader_root().rglob("*.glsl") if read_shader(
-        str(p.relative_to(shader_root()))).startswith("#version")]
+    programs = [
+        p
+        for p in shader_root().rglob("*.glsl")
+        if read_shader(str(p.relative_to(shader_root()))).startswith("#version")
+    ]
     assert programs, "no shader programs found"
     for path in programs:
         name = str(path.relative_to(shader_root()))

@@ -23,12 +23,19 @@ class _Parser(argparse.ArgumentParser):
 def _add_scene_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scene", help="shipped scene name (studio, room) or a TOML scene file")
     parser.add_argument("--env", help="lat-long environment (.exr or .hdr), replaces the scene's")
-    parser.add_argument("--mesh", help="mesh file (OBJ, PLY, STL, OFF, GLB), replaces the reflector")
+    parser.add_argument(
+        "--mesh", help="mesh file (OBJ, PLY, STL, OFF, GLB), replaces the reflector"
+    )
 
 
 def _add_param_option(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="method or display parameter (repeatable), e.g. lod_bias=2.3")
+    parser.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="method or display parameter (repeatable), e.g. lod_bias=2.3",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,11 +46,15 @@ def build_parser() -> argparse.ArgumentParser:
     view = sub.add_parser("view", help="open the viewer window (the default)")
     _add_scene_options(view)
     view.add_argument("--method", help="method shown first")
-    view.add_argument("--frames", type=int, default=0,
-                      help="quit after this many frames (0: run until closed)")
+    view.add_argument(
+        "--frames", type=int, default=0, help="quit after this many frames (0: run until closed)"
+    )
     view.add_argument("--screenshot", help="save a screenshot (with the UI) before quitting")
-    view.add_argument("--cycle-methods", action="store_true",
-                      help="switch to the next method every few frames (smoke tests)")
+    view.add_argument(
+        "--cycle-methods",
+        action="store_true",
+        help="switch to the next method every few frames (smoke tests)",
+    )
 
     render = sub.add_parser("render", help="render one frame headless (EGL)")
     _add_scene_options(render)
@@ -62,8 +73,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT (default 1280x720)")
     bench.add_argument("--frames", type=int, default=60, help="measured frames per method")
     bench.add_argument("--warmup", type=int, default=5, help="unmeasured frames per method")
-    bench.add_argument("--triangles", type=int, default=0,
-                       help="subdivide the reflector until it has at least this many triangles")
+    bench.add_argument(
+        "--triangles",
+        type=int,
+        default=0,
+        help="subdivide the reflector until it has at least this many triangles",
+    )
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
     return parser

@@ -66,8 +66,12 @@ def run_methods(args: argparse.Namespace) -> int:
     """``envstudio methods``: every method with its declared parameters."""
     described = [cls.describe() for cls in available_methods().values()]
     if args.json:
-        print(json.dumps({"methods": described,
-                          "display": [p.describe() for p in DISPLAY_PARAMETERS]}, indent=2))
+        print(
+            json.dumps(
+                {"methods": described, "display": [p.describe() for p in DISPLAY_PARAMETERS]},
+                indent=2,
+            )
+        )
         return 0
     for entry in described:
         print(f"{entry['name']}: {entry['title']} — {entry['summary']}")
@@ -75,14 +79,17 @@ def run_methods(args: argparse.Namespace) -> int:
             rng = f" [{p['minimum']:g}, {p['maximum']:g}]" if "minimum" in p else ""
             choices = f" {{{', '.join(p['choices'])}}}" if "choices" in p else ""
             unit = f" {p['unit']}" if p.get("unit") else ""
-            print(f"  {p['name']} ({p['kind']}{rng}{choices}, default {p['default']}{unit}): "
-                  f"{p.get('help', '')}")
+            print(
+                f"  {p['name']} ({p['kind']}{rng}{choices}, default {p['default']}{unit}): "
+                f"{p.get('help', '')}"
+            )
     return 0
 
 
 def run_bench(args: argparse.Namespace) -> int:
     """``envstudio bench``: per-method frame and pass times."""
-    from envstudio.render.bench import format_report, run_bench as bench
+    from envstudio.render.bench import format_report
+    from envstudio.render.bench import run_bench as bench
 
     size = parse_size(args.size)
     names = args.methods.split(",") if args.methods else list(available_methods())
@@ -99,11 +106,17 @@ def run_bench(args: argparse.Namespace) -> int:
     session = RenderSession(scene)
     try:
         for name in names:
-            apply_params(session, session.method(name), [
-                a for a in args.param if a.partition("=")[0] in session.method(name).values
-                or a.partition("=")[0] in _DISPLAY_NAMES])
-        report = bench(session, names, size, args.frames, args.warmup,
-                       progress=sys.stderr.isatty())
+            apply_params(
+                session,
+                session.method(name),
+                [
+                    a
+                    for a in args.param
+                    if a.partition("=")[0] in session.method(name).values
+                    or a.partition("=")[0] in _DISPLAY_NAMES
+                ],
+            )
+        report = bench(session, names, size, args.frames, args.warmup, progress=sys.stderr.isatty())
     finally:
         session.release()
     print(format_report(report))

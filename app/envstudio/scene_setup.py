@@ -15,8 +15,11 @@ from envstudio.scene.graph import Node, Scene
 DEFAULT_SCENE = "studio"
 
 
-def build_scene(scene: str | os.PathLike | None = None, env: str | os.PathLike | None = None,
-                mesh: str | os.PathLike | None = None) -> Scene:
+def build_scene(
+    scene: str | os.PathLike | None = None,
+    env: str | os.PathLike | None = None,
+    mesh: str | os.PathLike | None = None,
+) -> Scene:
     """Load ``scene`` (default ``studio``), then replace its environment and/or reflector.
 
     A replacement mesh is centred and fitted into the unit sphere and keeps
@@ -26,7 +29,9 @@ def build_scene(scene: str | os.PathLike | None = None, env: str | os.PathLike |
     if env is not None:
         result.environment = Environment(read_environment(env), Path(env))
     if mesh is not None:
-        result.nodes = [*replace_reflector(result, load_mesh(mesh).fitted(1.0)), ]
+        result.nodes = [
+            *replace_reflector(result, load_mesh(mesh).fitted(1.0)),
+        ]
     return result
 
 
@@ -63,7 +68,7 @@ def parse_camera(text: str) -> tuple[float, float, float]:
 
 
 def subdivide_reflectors(scene: Scene, min_triangles: int) -> None:
-    """Subdivide every reflector (midpoint, 4× per step) until the total reaches ``min_triangles``."""
+    """Subdivide every reflector (midpoint, 4× per step) to at least ``min_triangles`` in all."""
     import trimesh
 
     from envstudio.scene.mesh import MeshData

@@ -47,16 +47,24 @@ vec3 cube_face_direction(int face, vec2 uv) {
     return normalize(d);
 }
 
-// Antiderivative of the solid-angle element da db / (1 + a^2 + b^2)^(3/2) on a face plane.
-float cube_area_element(float a, float b) {
-    return atan(a * b, sqrt(a * a + b * b + 1.0));
+// Solid angle (sr) of the spherical triangle with unit corners a, b, c (Van Oosterom
+// and Strackee 1983): tan(omega / 2) = a.(b x c) / (1 + a.b + b.c + c.a), the triple
+// product taken on the edge vectors so that small triangles keep their precision.
+float cube_triangle_solid_angle(vec3 a, vec3 b, vec3 c) {
+    float triple = dot(a, cross(b - a, c - a));
+    return 2.0 * atan(abs(triple), 1.0 + dot(a, b) + dot(b, c) + dot(c, a));
 }
 
 // Exact solid angle (sr) of texel (column, row) of an n x n face (the same on every
-// face): the corner sum of cube_area_element over the texel's [a0, a1] x [b0, b1].
+// face). Texel edges lie on great circles, so the texel is a spherical quadrilateral:
+// two triangles. (core/cubemap.py integrates the area element instead; the two agree,
+// and this form keeps float32 precision for small texels.)
 float cube_texel_solid_angle(ivec2 texel, int size) {
-    vec2 lo = 2.0 * vec2(texel) / float(size) - 1.0;
-    vec2 hi = 2.0 * vec2(texel + 1) / float(size) - 1.0;
-    return cube_area_element(lo.x, lo.y) - cube_area_element(lo.x, hi.y)
-         - cube_area_element(hi.x, lo.y) + cube_area_element(hi.x, hi.y);
+    vec2 lo = vec2(texel) / float(size);
+    vec2 hi = vec2(texel + 1) / float(size);
+    vec3 c00 = cube_face_direction(4, lo);
+    vec3 c10 = cube_face_direction(4, vec2(hi.x, lo.y));
+    vec3 c11 = cube_face_direction(4, hi);
+    vec3 c01 = cube_face_direction(4, vec2(lo.x, hi.y));
+    return cube_triangle_solid_angle(c00, c10, c11) + cube_triangle_solid_angle(c00, c11, c01);
 }

@@ -9,10 +9,10 @@
 const float LATLONG_PI = 3.14159265358979;
 
 // Texture coordinates of direction d (any length but zero); u = 0.5 on the poles.
+// acos(y) is taken as atan(|xz|, y), which keeps float precision near the poles.
 vec2 latlong_uv(vec3 d) {
-    d = normalize(d);
     float u = (d.x == 0.0 && d.z == 0.0) ? 0.5 : 0.5 + atan(d.x, -d.z) / (2.0 * LATLONG_PI);
-    return vec2(u, acos(clamp(d.y, -1.0, 1.0)) / LATLONG_PI);
+    return vec2(u, atan(length(d.xz), d.y) / LATLONG_PI);
 }
 
 // Unit direction of texture coordinates uv: phi = 2pi (u - 0.5), theta = pi v,

@@ -30,31 +30,82 @@ vec4 paraboloid_texture_lod(sampler2DArray maps, vec3 d, float border, float lod
     return textureLod(maps, vec3(uv, float(face)), lod);
 }
 
-// Integral of 4 / (1 + s^2 + t^2)^2 over [0, a] x [0, b] clipped to the unit disc
-// (a, b >= 0); see core/paraboloid.py texel_solid_angles for the derivation.
-float paraboloid_quadrant_integral(float a, float b) {
-    if (a * a + b * b <= 1.0) {
-        float ka = sqrt(1.0 + a * a);
-        float kb = sqrt(1.0 + b * b);
-        return 2.0 * a / ka * atan(b / ka) + 2.0 * b / kb * atan(a / kb);
+// Integral of 4 / (1 + w (s^2 + t^2))^2 over the rectangle [lo, hi] clipped to the unit
+// disc: the dual paraboloid's solid-angle element for w = 1, the sphere map's (4 dp dq)
+// for w = 0. core/paraboloid.py and core/spheremap.py evaluate it in closed form; in
+// float32 that form cancels O(1) terms, so here it is integrated numerically instead:
+// over s in pieces split where the t limits switch between the rectangle's edges and
+// the rim (s = +-sqrt(1 - t^2)), each piece smooth, by 4-point Gauss-Legendre in s and
+// in t. The integrand is symmetric in s and t, so the outer variable is taken as the
+// one nearer the centre, where the rim is at most 45 degrees steep (elsewhere its
+// square-root shape would spoil the quadrature). Precise to float32 rounding of
+// texel-sized terms.
+float paraboloid_disc_integral(vec2 lo, vec2 hi, float w) {
+    if (max(abs(lo.x), abs(hi.x)) > max(abs(lo.y), abs(hi.y))) {
+        lo = lo.yx;
+        hi = hi.yx;
     }
-    float ac = min(a, 1.0);
-    float bc = min(b, 1.0);
-    float kac = sqrt(1.0 + ac * ac);
-    float kbc = sqrt(1.0 + bc * bc);
-    return 2.0 * ac / kac * atan(sqrt(1.0 - ac * ac) / kac) + (asin(bc) - acos(ac))
-         + 2.0 * bc / kbc * atan(sqrt(1.0 - bc * bc) / kbc);
+    const vec4 node = vec4(-0.8611363115940526, -0.3399810435848563,
+                           0.3399810435848563, 0.8611363115940526);
+    const vec4 weight = vec4(0.3478548451374538, 0.6521451548625461,
+                             0.6521451548625461, 0.3478548451374538);
+    float s_lo = max(lo.x, -1.0);
+    float s_hi = min(hi.x, 1.0);
+    if (s_lo >= s_hi) {
+        return 0.0;
+    }
+    float cuts[6];
+    int count = 1;
+    cuts[0] = s_lo;
+    for (int k = 0; k < 2; ++k) {
+        float t = k == 0 ? lo.y : hi.y;
+        float c = sqrt(max((1.0 - t) * (1.0 + t), 0.0));
+        if (-c > s_lo && -c < s_hi) {
+            cuts[count++] = -c;
+        }
+        if (c > s_lo && c < s_hi && c > 0.0) {
+            cuts[count++] = c;
+        }
+    }
+    cuts[count++] = s_hi;
+    for (int i = 1; i < count; ++i) {  // insertion sort of the piece boundaries
+        float v = cuts[i];
+        int j = i - 1;
+        while (j >= 0 && cuts[j] > v) {
+            cuts[j + 1] = cuts[j];
+            --j;
+        }
+        cuts[j + 1] = v;
+    }
+    float total = 0.0;
+    for (int k = 0; k + 1 < count; ++k) {
+        float mid = 0.5 * (cuts[k] + cuts[k + 1]);
+        float half_width = 0.5 * (cuts[k + 1] - cuts[k]);
+        for (int i = 0; i < 4; ++i) {
+            float s = mid + half_width * node[i];
+            float c = sqrt(max((1.0 - s) * (1.0 + s), 0.0));
+            float t_lo = max(lo.y, -c);
+            float t_hi = min(hi.y, c);
+            if (t_hi <= t_lo) {
+                continue;
+            }
+            float inner = 0.0;
+            for (int j = 0; j < 4; ++j) {
+                float t = 0.5 * (t_lo + t_hi) + 0.5 * (t_hi - t_lo) * node[j];
+                float k2 = 1.0 + w * (s * s + t * t);
+                inner += weight[j] * 4.0 / (k2 * k2);
+            }
+            total += weight[i] * half_width * 0.5 * (t_hi - t_lo) * inner;
+        }
+    }
+    return total;
 }
 
-float paraboloid_corner(vec2 st) {
-    return sign(st.x) * sign(st.y) * paraboloid_quadrant_integral(abs(st.x), abs(st.y));
-}
-
-// Exact solid angle (sr) of texel (column, row) of either face, counting the unit disc only.
+// Solid angle (sr) of texel (column, row) of either face, counting the unit disc only
+// (0 for texels wholly in the border).
 float paraboloid_texel_solid_angle(ivec2 texel, float size, float border) {
     float scale = size / (size - 2.0 * border);
     vec2 lo = (2.0 * vec2(texel) / size - 1.0) * scale;
     vec2 hi = (2.0 * vec2(texel + 1) / size - 1.0) * scale;
-    return paraboloid_corner(hi) - paraboloid_corner(vec2(lo.x, hi.y))
-         - paraboloid_corner(vec2(hi.x, lo.y)) + paraboloid_corner(lo);
+    return paraboloid_disc_integral(lo, hi, 1.0);
 }

@@ -6,6 +6,8 @@
 // direction (0, 0, -1). The map is equal-area: d omega = 16 ds dt in the disc.
 // Row 0 is t = 0, the bottom of the ball.
 
+#include "common/paraboloid.glsl"
+
 // Texture coordinates of view-space direction r (any length but zero); (0, 0, -1)
 // gives the rim point (0.5, 0).
 vec2 spheremap_uv(vec3 r) {
@@ -23,25 +25,11 @@ vec3 spheremap_direction(vec2 uv) {
     return vec3(2.0 * nz * pq, 2.0 * nz * nz - 1.0);
 }
 
-// Area of [0, a] x [0, b] clipped to the unit disc (a, b >= 0).
-float spheremap_quadrant_area(float a, float b) {
-    if (a * a + b * b <= 1.0) {
-        return a * b;
-    }
-    float ac = min(a, 1.0);
-    float bc = min(b, 1.0);
-    return 0.5 * (ac * sqrt(1.0 - ac * ac) + (asin(bc) - acos(ac)) + bc * sqrt(1.0 - bc * bc));
-}
-
-float spheremap_corner(vec2 pq) {
-    return sign(pq.x) * sign(pq.y) * spheremap_quadrant_area(abs(pq.x), abs(pq.y));
-}
-
-// Exact solid angle (sr) of texel (column, row) of an n x n sphere map: 4 times the
-// texel's area in (p, q) inside the unit disc; 0 outside the disc.
+// Solid angle (sr) of texel (column, row) of an n x n sphere map: 4 times the texel's
+// area in (p, q) inside the unit disc (16 / n^2 wholly inside, 0 outside); the rim
+// texels' clipped areas come from paraboloid_disc_integral with w = 0.
 float spheremap_texel_solid_angle(ivec2 texel, int size) {
     vec2 lo = 2.0 * vec2(texel) / float(size) - 1.0;
     vec2 hi = 2.0 * vec2(texel + 1) / float(size) - 1.0;
-    return 4.0 * (spheremap_corner(hi) - spheremap_corner(vec2(lo.x, hi.y))
-                  - spheremap_corner(vec2(hi.x, lo.y)) + spheremap_corner(lo));
+    return paraboloid_disc_integral(lo, hi, 0.0);
 }

@@ -33,7 +33,13 @@ import numpy.typing as npt
 
 from envstudio.core.latlong import _as_vectors
 
-__all__ = ["direction_to_uv", "texel_directions", "texel_solid_angles", "uv_to_direction"]
+__all__ = [
+    "direction_to_uv",
+    "disc_scale",
+    "texel_directions",
+    "texel_solid_angles",
+    "uv_to_direction",
+]
 
 
 def direction_to_uv(
@@ -57,7 +63,7 @@ def direction_to_uv(
     uv
         (..., 2) float64 texture coordinates in [B/n, 1 − B/n]².
     """
-    scale = _disc_scale(size, border)
+    scale = disc_scale(size, border)
     d = _as_vectors(directions, 3, "directions")
     d = d / np.linalg.norm(d, axis=-1, keepdims=True)
     face = np.where(d[..., 2] >= 0.0, 0, 1).astype(np.int64)
@@ -86,7 +92,7 @@ def uv_to_direction(
     (..., 3) float64
         Unit directions, world space: (2s, 2t, ±(1 − s² − t²)) / (1 + s² + t²).
     """
-    scale = _disc_scale(size, border)
+    scale = disc_scale(size, border)
     c = _as_vectors(uv, 2, "uv")
     face = np.asarray(face)
     if np.any((face != 0) & (face != 1)):
@@ -136,7 +142,7 @@ def texel_solid_angles(size: int, border: float = 0) -> npt.NDArray[np.float64]:
     (2, n, n) float64
         Steradians, indexed like the face arrays.
     """
-    edges = (2.0 * np.arange(size + 1) / size - 1.0) / _disc_scale(size, border)
+    edges = (2.0 * np.arange(size + 1) / size - 1.0) / disc_scale(size, border)
     a, b = np.meshgrid(edges, edges)
     H = np.sign(a) * np.sign(b) * _quadrant_integral(np.abs(a), np.abs(b))
     face = H[:-1, :-1] - H[1:, :-1] - H[:-1, 1:] + H[1:, 1:]
@@ -157,8 +163,24 @@ def _quadrant_integral(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(a * a + b * b <= 1.0, inside, clipped)
 
 
-def _disc_scale(size: int, border: float) -> float:
-    """(n − 2B) / n: the fraction of the texture the unit disc spans."""
+def disc_scale(size: int, border: float) -> float:
+    """The fraction (n − 2B) / n of a face's width that the unit disc spans.
+
+    Parameters
+    ----------
+    size, border
+        Face edge n and border B in texels.
+
+    Returns
+    -------
+    float
+        (n − 2B) / n.
+
+    Raises
+    ------
+    ValueError
+        Unless n ≥ 1 and 0 ≤ B < n/2.
+    """
     if size < 1 or not 0 <= border < size / 2:
         raise ValueError(
             f"paraboloid face needs size >= 1 and 0 <= border < size/2, got {size}, {border}"

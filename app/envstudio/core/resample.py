@@ -189,8 +189,8 @@ def latlong_to_cube(
     if k < 1:
         raise ValueError(f"samples must be at least 1, got {samples}")
     fine = sample_latlong(image, cubemap.texel_directions(size * k))
-    return fine.reshape(6, size, k, size, k, -1).mean(axis=(2, 4), dtype=np.float64).astype(
-        np.float32
+    return (
+        fine.reshape(6, size, k, size, k, -1).mean(axis=(2, 4), dtype=np.float64).astype(np.float32)
     )
 
 
@@ -274,7 +274,7 @@ def cube_to_spheremap(
     (size, size, c) float32
         core.spheremap layout; texels outside the disc hold the −Z (view) value.
     """
-    R = _rotation(view_rotation)
+    R = spheremap.view_rotation_matrix(view_rotation)
     return sample_cube(faces, spheremap.texel_directions(size) @ R.T)
 
 
@@ -297,7 +297,7 @@ def spheremap_to_cube(
     (6, n, n, c) float32
         Directions near view −Z come from the stretched rim (core.spheremap).
     """
-    R = _rotation(view_rotation)
+    R = spheremap.view_rotation_matrix(view_rotation)
     return sample_spheremap(image, cubemap.texel_directions(size) @ R)
 
 
@@ -330,7 +330,9 @@ def _pad_cube(faces: np.ndarray) -> np.ndarray:
     n = faces.shape[1]
     padded = np.zeros((6, n + 2, n + 2, faces.shape[3]), dtype=np.float64)
     padded[:, 1:-1, 1:-1] = faces
-    ring = [(i, j) for i in range(n + 2) for j in range(n + 2) if i in (0, n + 1) or j in (0, n + 1)]
+    ring = [
+        (i, j) for i in range(n + 2) for j in range(n + 2) if i in (0, n + 1) or j in (0, n + 1)
+    ]
     pi, pj = np.array(ring).T
     s, t = (pj - 0.5) / n, (pi - 0.5) / n
     eps = 1e-6
@@ -360,15 +362,6 @@ def _nearest_texel(faces: np.ndarray, face: int, st: np.ndarray) -> np.ndarray:
     j = np.clip(np.floor(uv[:, 0] * n).astype(np.int64), 0, n - 1)
     i = np.clip(np.floor(uv[:, 1] * n).astype(np.int64), 0, n - 1)
     return faces[target, i, j]
-
-
-def _rotation(view_rotation: npt.ArrayLike | None) -> npt.NDArray[np.float64]:
-    if view_rotation is None:
-        return np.eye(3)
-    R = np.asarray(view_rotation, dtype=np.float64)
-    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6):
-        raise ValueError(f"view_rotation must be a 3x3 rotation matrix, got {R.tolist()}")
-    return R
 
 
 def _faces(faces: npt.ArrayLike) -> np.ndarray:

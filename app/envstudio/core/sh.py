@@ -105,7 +105,7 @@ def project_sh9(
             f"radiance {L.shape}, directions {Y.shape[:-1]} + (3,) and solid angles "
             f"{w.shape} must share their leading shape"
         )
-    return np.einsum("...i,...,...c->ic", Y, w, L)
+    return np.einsum("ki,k,kc->ic", Y.reshape(-1, 9), w.reshape(-1), L.reshape(-1, 3))
 
 
 def irradiance_sh9(coeffs: npt.ArrayLike, normals: npt.ArrayLike) -> npt.NDArray[np.float64]:

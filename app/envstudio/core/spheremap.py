@@ -32,7 +32,13 @@ import numpy.typing as npt
 
 from envstudio.core.latlong import _as_vectors
 
-__all__ = ["direction_to_uv", "texel_directions", "texel_solid_angles", "uv_to_direction"]
+__all__ = [
+    "direction_to_uv",
+    "texel_directions",
+    "texel_solid_angles",
+    "uv_to_direction",
+    "view_rotation_matrix",
+]
 
 
 def direction_to_uv(directions: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -126,12 +132,37 @@ def texel_solid_angles(size: int) -> npt.NDArray[np.float64]:
     return 4.0 * (area[:-1, :-1] - area[1:, :-1] - area[:-1, 1:] + area[1:, 1:])
 
 
+def view_rotation_matrix(view_rotation: npt.ArrayLike | None = None) -> npt.NDArray[np.float64]:
+    """Check a sphere-map camera's world-from-view rotation.
+
+    Parameters
+    ----------
+    view_rotation
+        (3, 3) float whose columns are the camera's x, y and z axes in world space
+        (world = R @ view), or None.
+
+    Returns
+    -------
+    (3, 3) float64
+        The rotation; the identity for None.
+
+    Raises
+    ------
+    ValueError
+        If it is not a 3 × 3 orthonormal matrix.
+    """
+    if view_rotation is None:
+        return np.eye(3)
+    R = np.asarray(view_rotation, dtype=np.float64)
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6):
+        raise ValueError(f"view_rotation must be a 3x3 rotation matrix, got {R.tolist()}")
+    return R
+
+
 def _quadrant_area(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Area of [0, a] × [0, b] ∩ unit disc, for a, b ≥ 0."""
     ac, bc = np.minimum(a, 1.0), np.minimum(b, 1.0)
     clipped = 0.5 * (
-        ac * np.sqrt(1.0 - ac * ac)
-        + (np.arcsin(bc) - np.arccos(ac))
-        + bc * np.sqrt(1.0 - bc * bc)
+        ac * np.sqrt(1.0 - ac * ac) + (np.arcsin(bc) - np.arccos(ac)) + bc * np.sqrt(1.0 - bc * bc)
     )
     return np.where(a * a + b * b <= 1.0, a * b, clipped)

@@ -38,7 +38,9 @@ def load_mesh(path: str | os.PathLike, components: Sequence[int] | None = None) 
     if not path.is_file():
         raise InputFileError(f"{path}: no such file (expected a mesh: {', '.join(MESH_SUFFIXES)})")
     if path.suffix.lower() not in MESH_SUFFIXES:
-        raise InputFileError(f"{path}: unknown mesh type, expected one of {', '.join(MESH_SUFFIXES)}")
+        raise InputFileError(
+            f"{path}: unknown mesh type, expected one of {', '.join(MESH_SUFFIXES)}"
+        )
     try:
         loaded = trimesh.load(str(path), force="mesh")
     except Exception as exc:

@@ -29,9 +29,10 @@ Example::
 from __future__ import annotations
 
 import os
-import tomllib
 from pathlib import Path
 from typing import Any
+
+import tomllib
 
 from envstudio.errors import InputFileError
 from envstudio.io.images import read_environment
@@ -53,8 +54,11 @@ def shipped_scenes() -> dict[str, Path]:
 def shipped_environments() -> dict[str, Path]:
     """Environment name → file for the HDR maps in ``assets/hdr``."""
     folder = asset_root() / "hdr"
-    return {p.stem if p.suffix == ".exr" else p.name: p for p in sorted(folder.glob("*.*"))
-            if p.suffix in (".exr", ".hdr")}
+    return {
+        p.stem if p.suffix == ".exr" else p.name: p
+        for p in sorted(folder.glob("*.*"))
+        if p.suffix in (".exr", ".hdr")
+    }
 
 
 def resolve_scene(name_or_path: str | os.PathLike) -> Path:
@@ -86,9 +90,10 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     reader = _SceneReader(path)
     env_spec = data.get("environment", {})
     if "file" not in env_spec:
-        raise InputFileError(f"{path}: [environment] needs file = \"...\"")
-    environment = Environment(read_environment(reader.find(env_spec["file"])),
-                              reader.find(env_spec["file"]))
+        raise InputFileError(f'{path}: [environment] needs file = "..."')
+    environment = Environment(
+        read_environment(reader.find(env_spec["file"])), reader.find(env_spec["file"])
+    )
     objects = data.get("object", [])
     if not objects:
         raise InputFileError(f"{path}: no [[object]] entries, expected at least one")
@@ -108,8 +113,12 @@ def scene_from_files(env_path: str | os.PathLike, mesh_path: str | os.PathLike |
     """A one-reflector scene: ``mesh_path`` (or a sphere) under the environment ``env_path``."""
     env_path = Path(env_path)
     mesh = load_mesh(mesh_path).fitted(1.0) if mesh_path else uv_sphere(1.0)
-    return Scene(Environment(read_environment(env_path), env_path),
-                 [Node(mesh.name, mesh)], OrbitCamera(distance=3.2), mesh.name)
+    return Scene(
+        Environment(read_environment(env_path), env_path),
+        [Node(mesh.name, mesh)],
+        OrbitCamera(distance=3.2),
+        mesh.name,
+    )
 
 
 class _SceneReader:
@@ -144,7 +153,9 @@ class _SceneReader:
             mesh = mesh.fitted(self.number(spec, "fit", 1.0, where))
         role = spec.get("role", "reflector")
         if role not in ("reflector", "local"):
-            raise InputFileError(f"{self.path}: {where}.role = {role!r}, expected reflector or local")
+            raise InputFileError(
+                f"{self.path}: {where}.role = {role!r}, expected reflector or local"
+            )
         mat = spec.get("material", {})
         kd = mat.get("kd", (0.0, 0.0, 0.0))
         kd = (float(kd),) * 3 if isinstance(kd, (int, float)) else self.vector(mat, "kd", kd, where)
@@ -166,10 +177,13 @@ class _SceneReader:
             return load_mesh(self.find(spec["mesh"]), spec.get("components"))
         primitive = spec.get("primitive")
         size = self.number(spec, "size", 1.0, where)
-        makers = {"sphere": lambda: uv_sphere(size / 2), "box": lambda: box(size),
-                  "room": lambda: box(size, inward=True)}
+        makers = {
+            "sphere": lambda: uv_sphere(size / 2),
+            "box": lambda: box(size),
+            "room": lambda: box(size, inward=True),
+        }
         if primitive not in makers:
             raise InputFileError(
-                f"{self.path}: {where} needs mesh = \"file\" or primitive = sphere|box|room"
+                f'{self.path}: {where} needs mesh = "file" or primitive = sphere|box|room'
             )
         return makers[primitive]()

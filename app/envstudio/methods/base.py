@@ -51,7 +51,7 @@ class Method(ABC):
     def render(self, frame: FrameInputs) -> None:
         """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
 
-    def release(self) -> None:
+    def release(self) -> None:  # noqa: B027  (optional hook: most methods own nothing extra)
         """Free GPU resources the method owns; safe to call twice."""
 
     @classmethod

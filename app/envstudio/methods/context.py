@@ -47,8 +47,9 @@ class GpuScene:
         Edge length in texels of the environment cube map's level 0.
     """
 
-    def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary, scene: Scene,
-                 cube_size: int = 256):
+    def __init__(
+        self, ctx: moderngl.Context, programs: ProgramLibrary, scene: Scene, cube_size: int = 256
+    ):
         self.ctx = ctx
         self.programs = programs
         self.scene = scene
@@ -73,8 +74,15 @@ class GpuScene:
 
     def set_nodes(self, nodes: list[Node]) -> None:
         """Upload the meshes of ``nodes`` (replacing the previous ones)."""
-        uploaded = [GpuNode(n, GpuMesh(self.ctx, n.mesh), n.transform.matrix(),
-                            normal_matrix(n.transform.matrix())) for n in nodes]
+        uploaded = [
+            GpuNode(
+                n,
+                GpuMesh(self.ctx, n.mesh),
+                n.transform.matrix(),
+                normal_matrix(n.transform.matrix()),
+            )
+            for n in nodes
+        ]
         self._release_nodes()
         self.nodes = uploaded
         self.scene.nodes = list(nodes)

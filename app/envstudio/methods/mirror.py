@@ -19,10 +19,19 @@ class MirrorMethod(Method):
 
     name = "mirror"
     title = "Mirror (Blinn–Newell)"
-    summary = "Mirror reflection from the cube map, Schlick Fresnel blend with a crude diffuse term."
+    summary = (
+        "Mirror reflection from the cube map, Schlick Fresnel blend with a crude diffuse term."
+    )
     parameters = (
-        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ",
-                  "Schlick reflectance at normal incidence (1 = perfect mirror)."),
+        Parameter(
+            "fresnel",
+            "float",
+            1.0,
+            0.0,
+            1.0,
+            "f_λ",
+            "Schlick reflectance at normal incidence (1 = perfect mirror).",
+        ),
         Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo of the (1 − F) term."),
     )
 

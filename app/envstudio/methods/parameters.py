@@ -71,7 +71,9 @@ class Parameter:
             raise ParameterError(f"{self.name}={value}: expected true or false")
         if self.kind == "choice":
             if str(value) not in self.choices:
-                raise ParameterError(f"{self.name}={value}: expected one of {', '.join(self.choices)}")
+                raise ParameterError(
+                    f"{self.name}={value}: expected one of {', '.join(self.choices)}"
+                )
             return str(value)
         try:
             number = int(value) if self.kind == "int" else float(value)
@@ -79,8 +81,10 @@ class Parameter:
             raise ParameterError(f"{self.name}={value}: expected {self._expected()}") from None
         if self.kind == "int" and float(value) != number:
             raise ParameterError(f"{self.name}={value}: expected {self._expected()}")
-        if number != number or (self.minimum is not None and number < self.minimum) or (
-            self.maximum is not None and number > self.maximum
+        if (
+            number != number
+            or (self.minimum is not None and number < self.minimum)
+            or (self.maximum is not None and number > self.maximum)
         ):
             raise ParameterError(f"{self.name}={value}: expected {self._expected()}")
         return number

@@ -23,8 +23,14 @@ def _summary(samples: list[float]) -> dict[str, float]:
     return {"median_ms": float(np.median(values)), "p95_ms": float(np.percentile(values, 95))}
 
 
-def run_bench(session: RenderSession, methods: list[str], size: tuple[int, int], frames: int,
-              warmup: int = 5, progress: bool = True) -> dict:
+def run_bench(
+    session: RenderSession,
+    methods: list[str],
+    size: tuple[int, int],
+    frames: int,
+    warmup: int = 5,
+    progress: bool = True,
+) -> dict:
     """Benchmark ``methods`` in one session.
 
     Returns
@@ -35,11 +41,22 @@ def run_bench(session: RenderSession, methods: list[str], size: tuple[int, int],
         a finish at both ends) and ``passes`` (median/p95 of each pass).
     """
     triangles = sum(n.mesh.triangle_count for n in session.gpu_scene.reflectors())
-    report = {"device": describe(session.ctx), "clock": session.renderer.timer.clock,
-              "size": list(size), "frames": frames, "warmup": warmup,
-              "reflector_triangles": triangles, "methods": {}}
-    bar = tqdm(total=len(methods) * (frames + warmup), desc="bench", unit="frame",
-               disable=not progress, file=sys.stderr)
+    report = {
+        "device": describe(session.ctx),
+        "clock": session.renderer.timer.clock,
+        "size": list(size),
+        "frames": frames,
+        "warmup": warmup,
+        "reflector_triangles": triangles,
+        "methods": {},
+    }
+    bar = tqdm(
+        total=len(methods) * (frames + warmup),
+        desc="bench",
+        unit="frame",
+        disable=not progress,
+        file=sys.stderr,
+    )
     for name in methods:
         method = session.method(name)
         frame_ms: list[float] = []
@@ -67,12 +84,16 @@ def run_bench(session: RenderSession, methods: list[str], size: tuple[int, int],
 
 def format_report(report: dict) -> str:
     """A plain-text table of a bench report."""
-    lines = [f"device: {report['device']}  clock: {report['clock']}  "
-             f"size: {report['size'][0]}x{report['size'][1]}  "
-             f"reflector triangles: {report['reflector_triangles']}",
-             f"{'method':<12} {'frame med':>10} {'frame p95':>10}  passes (median ms)"]
+    lines = [
+        f"device: {report['device']}  clock: {report['clock']}  "
+        f"size: {report['size'][0]}x{report['size'][1]}  "
+        f"reflector triangles: {report['reflector_triangles']}",
+        f"{'method':<12} {'frame med':>10} {'frame p95':>10}  passes (median ms)",
+    ]
     for name, entry in report["methods"].items():
         passes = "  ".join(f"{k}={v['median_ms']:.3f}" for k, v in entry["passes"].items())
-        lines.append(f"{name:<12} {entry['frame']['median_ms']:>10.3f} "
-                     f"{entry['frame']['p95_ms']:>10.3f}  {passes}")
+        lines.append(
+            f"{name:<12} {entry['frame']['median_ms']:>10.3f} "
+            f"{entry['frame']['p95_ms']:>10.3f}  {passes}"
+        )
     return "\n".join(lines)

@@ -1,4 +1,4 @@
-"""Display settings shared by the window, ``render`` and ``compare``: exposure, tone map, background."""
+"""Display settings shared by window, ``render`` and ``compare``: exposure, tone map, background."""
 
 from __future__ import annotations
 
@@ -7,10 +7,22 @@ from envstudio.methods.parameters import Parameter, ParameterValues
 TONEMAPS = ("none", "reinhard", "aces")
 
 DISPLAY_PARAMETERS = (
-    Parameter("exposure", "float", 0.0, -10.0, 10.0, "EV",
-              "Exposure in stops applied before the tone map (PNG/screen only; EXR stays linear)."),
-    Parameter("tonemap", "choice", "aces", choices=TONEMAPS,
-              help="Tone mapper between exposure and sRGB encoding."),
+    Parameter(
+        "exposure",
+        "float",
+        0.0,
+        -10.0,
+        10.0,
+        "EV",
+        "Exposure in stops applied before the tone map (PNG/screen only; EXR stays linear).",
+    ),
+    Parameter(
+        "tonemap",
+        "choice",
+        "aces",
+        choices=TONEMAPS,
+        help="Tone mapper between exposure and sRGB encoding.",
+    ),
     Parameter("background", "bool", True, help="Draw the environment behind the objects."),
 )
 

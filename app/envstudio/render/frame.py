@@ -69,8 +69,9 @@ class FrameRenderer:
         """The float target of the last frame (None before the first)."""
         return self._fbo
 
-    def render_hdr(self, scene: GpuScene, method: Method, camera: OrbitCamera,
-                   size: tuple[int, int]) -> None:
+    def render_hdr(
+        self, scene: GpuScene, method: Method, camera: OrbitCamera, size: tuple[int, int]
+    ) -> None:
         """Render background, local objects and the method's reflectors into the HDR target."""
         self._ensure_target(size)
         fbo = self._fbo
@@ -90,9 +91,15 @@ class FrameRenderer:
         method.render(frame)
         fbo.use()
 
-    def render(self, scene: GpuScene, method: Method, camera: OrbitCamera,
-               size: tuple[int, int], target: moderngl.Framebuffer,
-               viewport: tuple[int, int, int, int] | None = None) -> FrameStats:
+    def render(
+        self,
+        scene: GpuScene,
+        method: Method,
+        camera: OrbitCamera,
+        size: tuple[int, int],
+        target: moderngl.Framebuffer,
+        viewport: tuple[int, int, int, int] | None = None,
+    ) -> FrameStats:
         """Render one frame and show it in ``target`` (the window or an offscreen LDR target).
 
         Parameters
@@ -110,8 +117,12 @@ class FrameRenderer:
             self.present(target, viewport or (0, 0, *size))
         return FrameStats(dict(self.timer.times_ms), self.timer.clock)
 
-    def present(self, target: moderngl.Framebuffer, viewport: tuple[int, int, int, int],
-                display: ParameterValues | None = None) -> None:
+    def present(
+        self,
+        target: moderngl.Framebuffer,
+        viewport: tuple[int, int, int, int],
+        display: ParameterValues | None = None,
+    ) -> None:
         """Tone-map the HDR target into ``viewport`` of ``target``."""
         display = display or self.display
         target.use()
@@ -138,9 +149,9 @@ class FrameRenderer:
         scene.cube.use(location=0)
         set_uniform(program, "u_environment", 0)
         set_uniform(program, "u_inverse_view_projection", inverse.astype(np.float32))
-        self.ctx.depth_mask = False
+        self.ctx.disable(moderngl.DEPTH_TEST)  # no depth writes: objects draw over it
         self._fullscreen.draw(program)
-        self.ctx.depth_mask = True
+        self.ctx.enable(moderngl.DEPTH_TEST)
 
     def _draw_local(self, scene: GpuScene, view, projection) -> None:
         program = self.programs.get("frame/local_diffuse.glsl")

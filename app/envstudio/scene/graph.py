@@ -70,8 +70,14 @@ class Scene:
         corners = []
         for node in self.reflectors():
             lo, hi = node.mesh.bounds()
-            box = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+            box = np.array(
+                [
+                    [x, y, z, 1.0]
+                    for x in (lo[0], hi[0])
+                    for y in (lo[1], hi[1])
+                    for z in (lo[2], hi[2])
+                ]
+            )
             corners.append((node.transform.matrix() @ box.T).T[:, :3])
         if not corners:
             return np.zeros(3)

@@ -40,7 +40,10 @@ def box(size: float = 1.0, inward: bool = False) -> MeshData:
                 positions.append((n + du * u + dv * v) * size / 2)
                 normals.append(-n if inward else n)
             quad = [(0, 1, 2), (0, 2, 3)]
-            tris += [(base + i, base + k, base + j) if inward else (base + i, base + j, base + k)
-                     for i, j, k in quad]
-    return MeshData(np.array(positions), np.array(normals), np.array(tris),
-                    "room" if inward else f"box({size})")
+            tris += [
+                (base + i, base + k, base + j) if inward else (base + i, base + j, base + k)
+                for i, j, k in quad
+            ]
+    return MeshData(
+        np.array(positions), np.array(normals), np.array(tris), "room" if inward else f"box({size})"
+    )

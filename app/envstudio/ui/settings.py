@@ -96,7 +96,10 @@ def load_settings() -> tuple[ViewerSettings, str | None]:
         backup = path.with_name(path.name + ".corrupt")
         os.replace(path, backup)
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        return ViewerSettings(), f"{path}: corrupt settings ({reason}); moved to {backup.name}, using defaults"
+        return (
+            ViewerSettings(),
+            f"{path}: corrupt settings ({reason}); moved to {backup.name}, using defaults",
+        )
 
 
 def save_settings(settings: ViewerSettings) -> None:

@@ -1,0 +1,546 @@
+"""The desktop viewer: the scene rendered by the selected method, with ImGui panels on top.
+
+Each frame::
+
+    run the jobs announced last frame (file loads)       DeferredWork.run_due
+    poll "Open..." dialogs; cycle methods; turntable
+    FrameRenderer.render → window framebuffer            capture without UI / EXR here
+    panels → imgui.render → ImGuiRenderer.render         capture with UI here
+
+Input goes to ImGui first; the camera and the shortcuts act only when ImGui
+does not want the mouse / keyboard. Shortcuts: 1–9 pick a method, R resets the
+camera, F12 saves a PNG, Escape quits.
+
+Settings (method, parameter values per method, display, scene, environment,
+mesh, camera, rotation, turntable, window size, panel layout) are restored on
+start and saved on exit; command-line options win over them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import moderngl
+import numpy as np
+from imgui_bundle import imgui, implot
+from moderngl_window import WindowConfig
+from moderngl_window.context.base import BaseWindow, KeyModifiers
+from moderngl_window.timers.clock import Timer
+
+from envstudio.errors import ParameterError, UserError
+from envstudio.io.atomic import check_output_path
+from envstudio.io.images import HDR_SUFFIXES
+from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
+from envstudio.io.scene_file import shipped_scenes
+from envstudio.methods.base import Method, available_methods, method_class
+from envstudio.methods.parameters import ParameterValues
+from envstudio.render.session import RenderSession
+from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.graph import Node, Scene
+from envstudio.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
+from envstudio.ui.camera_control import CameraControl
+from envstudio.ui.capture import (
+    CaptureRequest,
+    capture_path,
+    default_captures_dir,
+    read_framebuffer,
+    save,
+)
+from envstudio.ui.file_dialogs import OpenFileDialog
+from envstudio.ui.imgui_input import ImGuiInput
+from envstudio.ui.imgui_renderer import ImGuiRenderer
+from envstudio.ui.jobs import DeferredWork
+from envstudio.ui.panels import (
+    CaptureOptions,
+    SceneDialogs,
+    capture_panel,
+    method_panel,
+    scene_panel,
+    stats_panel,
+)
+from envstudio.ui.scene_control import SceneControl
+from envstudio.ui.settings import ViewerSettings, load_settings, save_settings
+from envstudio.ui.stats import FrameHistory
+from envstudio.ui.status import StatusLine
+from envstudio.ui.style import load_ui_font
+from envstudio.ui.window import open_window
+
+TITLE = "envmap-studio"
+CYCLE_FRAMES = 2
+"""Frames each method is shown with ``--cycle-methods``."""
+MIN_WINDOW_SIZE = (320, 240)
+MAX_WINDOW_SIZE = (16384, 16384)
+
+
+@dataclass
+class StartScene:
+    """The scene the viewer opens with and where it came from.
+
+    Attributes
+    ----------
+    scene : Scene
+        Loaded scene (environment and reflector replacements applied).
+    spec : str
+        Shipped scene name or absolute scene file path.
+    reflectors : list of Node
+        The scene file's own reflectors.
+    environment, mesh : str or None
+        Replacement files.
+    """
+
+    scene: Scene
+    spec: str
+    reflectors: list[Node]
+    environment: str | None
+    mesh: str | None
+
+
+@dataclass
+class RunOptions:
+    """Command-line behaviour of one run (``--frames``, ``--screenshot``, ``--cycle-methods``)."""
+
+    frames: int = 0
+    screenshot: Path | None = None
+    cycle_methods: bool = False
+
+
+def run_viewer(args: argparse.Namespace) -> int:
+    """Open the viewer window and run until it is closed (or ``--frames`` are drawn).
+
+    Parameters
+    ----------
+    args
+        The ``view`` options: scene, env, mesh, method, frames, screenshot, cycle_methods.
+
+    Returns
+    -------
+    int
+        Exit status 0.
+
+    Raises
+    ------
+    UserError
+        A bad option or file named on the command line, or no display.
+    """
+    if args.frames < 0:
+        raise ParameterError(f"--frames {args.frames}: expected a count >= 0")
+    screenshot = None
+    if args.screenshot:
+        screenshot = check_output_path(args.screenshot)
+        if screenshot.suffix.lower() != ".png":
+            raise ParameterError(f"--screenshot {screenshot}: expected a .png file name")
+    if args.method:
+        method_class(args.method)
+    settings, warning = load_settings()
+    warnings = [warning] if warning else []
+    start = _start_scene(args, settings, warnings)
+    for line in warnings:
+        print(f"envstudio: warning: {line}", file=sys.stderr)
+    window = open_window(_window_size(settings.window_size), TITLE)
+    try:
+        viewer = Viewer(
+            ctx=window.ctx,
+            wnd=window,
+            timer=Timer(),
+            start=start,
+            settings=settings,
+            method=args.method,
+            options=RunOptions(args.frames, screenshot, args.cycle_methods),
+            warnings=warnings,
+        )
+        try:
+            viewer.run()
+        finally:
+            viewer.shutdown()
+    finally:
+        window.destroy()
+    return 0
+
+
+def _start_scene(
+    args: argparse.Namespace, settings: ViewerSettings, warnings: list[str]
+) -> StartScene:
+    """The scene from the command line, else the one last shown (falling back to the default)."""
+    given = (args.scene, args.env, args.mesh)
+    if args.scene is None:
+        wanted = (settings.scene, args.env or settings.environment, args.mesh or settings.mesh)
+    else:
+        wanted = given
+    try:
+        return _load_start(*wanted)
+    except UserError as exc:
+        if wanted == given:
+            raise
+        warnings.append(f"cannot restore the last scene ({exc}); using the defaults")
+        return _load_start(*given)
+
+
+def _load_start(spec: str | None, environment: str | None, mesh: str | None) -> StartScene:
+    spec = spec or DEFAULT_SCENE
+    scene = build_scene(spec, environment, None)
+    reflectors = scene.reflectors()
+    if mesh:
+        scene.nodes = replace_reflector(scene, load_mesh(mesh).fitted(1.0))
+    if spec not in shipped_scenes():
+        spec = str(Path(spec).resolve())
+    return StartScene(scene, spec, reflectors, environment, mesh)
+
+
+def _window_size(saved: list) -> tuple[int, int]:
+    """The saved window size within sane limits (the default if malformed)."""
+    if len(saved) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in saved):
+        saved = ViewerSettings().window_size
+    return tuple(
+        min(max(v, lo), hi)
+        for v, lo, hi in zip(saved, MIN_WINDOW_SIZE, MAX_WINDOW_SIZE, strict=True)
+    )
+
+
+def restore_values(values: ParameterValues, saved: object) -> list[str]:
+    """Assign the saved ``{name: value}`` entries that are declared and valid.
+
+    Returns
+    -------
+    list of str
+        One message per rejected value (unknown names are skipped silently:
+        a parameter may have been renamed since the settings were written).
+    """
+    if not isinstance(saved, dict):
+        return [f"expected a table of parameter values, got {type(saved).__name__}"]
+    problems = []
+    for name, value in saved.items():
+        if name in values:
+            try:
+                values[name] = value
+            except ParameterError as exc:
+                problems.append(str(exc))
+    return problems
+
+
+def restore_camera(camera: OrbitCamera, saved: dict) -> list[str]:
+    """Set the saved azimuth, elevation, distance and target; returns rejected entries."""
+    problems = []
+    for key in ("azimuth", "elevation", "distance"):
+        value = saved.get(key)
+        if _is_number(value):
+            setattr(camera, key, float(value))
+        elif key in saved:
+            problems.append(f"camera.{key} = {value!r}, expected a number")
+    target = saved.get("target")
+    if isinstance(target, list) and len(target) == 3 and all(_is_number(v) for v in target):
+        camera.target = np.array(target, dtype=np.float64)
+    elif "target" in saved:
+        problems.append(f"camera.target = {target!r}, expected [x, y, z]")
+    camera.orbit(0.0, 0.0)
+    camera.zoom(1.0)
+    return problems
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+class Viewer(WindowConfig):
+    """The viewer's window callbacks, frame and panels.
+
+    Parameters
+    ----------
+    ctx, wnd, timer
+        The window's context, the window and its frame timer.
+    start
+        The scene to show first.
+    settings
+        Settings read at start; updated and saved by :meth:`shutdown`.
+    method
+        Method named on the command line (None: the one last shown).
+    options
+        ``--frames``, ``--screenshot``, ``--cycle-methods``.
+    warnings
+        Messages to show in the status line from the start.
+    """
+
+    def __init__(
+        self,
+        ctx: moderngl.Context,
+        wnd: BaseWindow,
+        timer: Timer,
+        start: StartScene,
+        settings: ViewerSettings,
+        method: str | None,
+        options: RunOptions,
+        warnings: list[str],
+    ):
+        super().__init__(ctx=ctx, wnd=wnd, timer=timer)
+        wnd.exit_key = None  # Escape is a shortcut, ignored while ImGui has the keyboard
+        self.settings = settings
+        self.options = options
+        self.status = StatusLine()
+        self.jobs = DeferredWork(self.status)
+        self.session = RenderSession(start.scene, ctx=ctx)
+        self.control = SceneControl(
+            self.session, start.spec, start.reflectors, start.environment, start.mesh
+        )
+        self.methods = available_methods()
+        self._restored_methods: set[str] = set()
+        saved_method = settings.method if settings.method in self.methods else None
+        self.method_name = method or saved_method or next(iter(self.methods))
+        self.camera_control = CameraControl(wnd.mouse.left, wnd.mouse.right)
+        self.history = FrameHistory()
+        self.capture = CaptureOptions(str(default_captures_dir()))
+        self._capture_request: CaptureRequest | None = None
+        self.dialogs = SceneDialogs(
+            OpenFileDialog("Open environment", "HDR environments", HDR_SUFFIXES),
+            OpenFileDialog("Open mesh", "Meshes", MESH_SUFFIXES),
+        )
+        self.frames = 0
+        keys = wnd.keys
+        self._number_keys = [getattr(keys, f"NUMBER_{i}") for i in range(1, 10)]
+
+        problems = self._restore(settings, start)
+        for problem in problems:
+            print(f"envstudio: warning: {problem}", file=sys.stderr)
+        if warnings or problems:
+            self.status.error("; ".join([*warnings, *problems]))
+        imgui.create_context()
+        imgui.get_io().set_ini_filename(None)
+        load_ui_font()
+        if settings.imgui_ini:
+            imgui.load_ini_settings_from_memory(settings.imgui_ini)
+        implot.create_context()
+        self.gui_input = ImGuiInput(imgui.get_io(), keys)
+        self.gui = ImGuiRenderer(ctx)
+
+    def _restore(self, settings: ViewerSettings, start: StartScene) -> list[str]:
+        """Apply the saved display, camera, rotation and turntable; returns what was rejected."""
+        problems = restore_values(self.session.renderer.display, settings.display)
+        if start.spec == (settings.scene or DEFAULT_SCENE):
+            problems += restore_camera(self.session.camera, settings.camera)
+        rotation = settings.object_rotation
+        if len(rotation) == 3 and all(_is_number(v) for v in rotation):
+            self.control.set_rotation(rotation)
+        else:
+            problems.append(f"object_rotation = {rotation!r}, expected [x, y, z] degrees")
+        self.control.turntable = settings.turntable
+        self.control.turntable_speed = float(settings.turntable_speed)
+        return [f"settings: {problem}" for problem in problems]
+
+    def method(self, name: str) -> Method:
+        """The session's method ``name``, with its saved parameter values on first use."""
+        method = self.session.method(name)
+        if name not in self._restored_methods:
+            self._restored_methods.add(name)
+            saved = self.settings.method_values.get(name, {})
+            for problem in restore_values(method.values, saved):
+                message = f"settings: {name}: {problem}"
+                print(f"envstudio: warning: {message}", file=sys.stderr)
+                self.status.error(message)
+        return method
+
+    def select_method(self, name: str) -> None:
+        """Show method ``name``."""
+        self.method(name)
+        self.method_name = name
+
+    def _cycle(self) -> None:
+        """``--cycle-methods``: the next method (the first shown at frame 0), printed on stdout."""
+        names = list(self.methods)
+        if self.frames > 0:
+            following = names[(names.index(self.method_name) + 1) % len(names)]
+            if following == self.method_name:
+                return
+            self.select_method(following)
+        print(f"envstudio: method {self.method_name}", flush=True)
+
+    def run(self) -> None:
+        """The main loop: draw and swap until the window is closing."""
+        self.timer.start()
+        while not self.wnd.is_closing:
+            now, delta = self.timer.next_frame()
+            self.wnd.use()
+            self.wnd.render(now, delta)
+            if not self.wnd.is_closing:
+                self.wnd.swap_buffers()
+        self.timer.stop()
+
+    def on_render(self, time: float, frametime: float) -> None:
+        """Draw one frame: scene, panels, captures; stop after ``--frames``."""
+        self.jobs.run_due()
+        self._poll_dialogs()
+        if self.options.cycle_methods and self.frames % CYCLE_FRAMES == 0:
+            self._cycle()
+        self.control.advance(frametime)
+        size = self.wnd.buffer_size
+        if size[0] < 1 or size[1] < 1:
+            return
+        screen = self.ctx.screen
+        stats = self.session.renderer.render(
+            self.session.gpu_scene,
+            self.method(self.method_name),
+            self.session.camera,
+            size,
+            screen,
+            (0, 0, *size),
+        )
+        self.history.add(frametime * 1e3, stats)
+        request, self._capture_request = self._capture_request, None
+        if request and not request.with_ui:
+            self._take_capture(request, size)
+
+        self.gui_input.prepare_frame(self.wnd.size, size, frametime)
+        imgui.new_frame()
+        self._panels(size)
+        self.status.draw()
+        imgui.render()
+        self.wnd.use()
+        self.gui.render(imgui.get_draw_data())
+        self.jobs.mark_shown()
+        if request and request.with_ui:
+            self._take_capture(request, size)
+
+        self.frames += 1
+        if self.options.frames and self.frames >= self.options.frames:
+            if self.options.screenshot:
+                save(self.options.screenshot, read_framebuffer(screen, size))
+            self.wnd.close()
+
+    def _panels(self, size: tuple[int, int]) -> None:
+        method = self.method(self.method_name)
+        picked = method_panel(self.methods, method, self.session.scene, self.status)
+        if picked:
+            self.select_method(picked)
+        scene_panel(
+            self.control, self.session.renderer.display, self.dialogs, self.jobs, self.status
+        )
+        stats_panel(self.history, size)
+        if capture_panel(self.capture):
+            self._request_capture(self.capture.fmt)
+
+    def _poll_dialogs(self) -> None:
+        environment = self.dialogs.environment.poll()
+        if environment:
+            self.jobs.submit(
+                f"loading {environment.name}", lambda: self.control.load_environment(environment)
+            )
+        mesh = self.dialogs.mesh.poll()
+        if mesh:
+            self.jobs.submit(f"loading {mesh.name}", lambda: self.control.load_mesh(mesh))
+
+    def _request_capture(self, fmt: str) -> None:
+        """Take a capture of ``fmt`` during the next frame."""
+        try:
+            path = capture_path(
+                self.capture.folder, self.control.scene_label, self.method_name, fmt
+            )
+        except UserError as exc:
+            self.status.error(str(exc))
+            return
+        self._capture_request = CaptureRequest(path, self.capture.with_ui and fmt == "png")
+
+    def _take_capture(self, request: CaptureRequest, size: tuple[int, int]) -> None:
+        try:
+            if request.is_hdr:
+                pixels = self.session.read_hdr()
+            else:
+                pixels = read_framebuffer(self.ctx.screen, size)
+            path = save(request.path, pixels)
+        except UserError as exc:
+            self.status.error(str(exc))
+            return
+        self.status.note(f"saved {path}")
+
+    def on_key_event(self, key, action, modifiers: KeyModifiers) -> None:
+        """Keys go to ImGui; shortcuts act when ImGui does not want the keyboard."""
+        self.gui_input.on_key_event(key, action, modifiers)
+        keys = self.wnd.keys
+        if action != keys.ACTION_PRESS or self.gui_input.want_capture_keyboard:
+            return
+        if key in self._number_keys:
+            names = list(self.methods)
+            index = self._number_keys.index(key)
+            if index < len(names):
+                self.select_method(names[index])
+        elif key == keys.R:
+            self.session.camera.reset()
+        elif key == keys.F12:
+            self._request_capture("png")
+        elif key == keys.ESCAPE:
+            self.wnd.close()
+
+    def on_mouse_position_event(self, x: int, y: int, dx: int, dy: int) -> None:
+        """Cursor moves (no button held) go to ImGui only."""
+        self.gui_input.on_mouse_position_event(x, y, dx, dy)
+
+    def on_mouse_press_event(self, x: int, y: int, button: int) -> None:
+        """A press starts a camera gesture unless it was over a panel."""
+        self.gui_input.on_mouse_press_event(x, y, button)
+        self.camera_control.press(
+            button, self.wnd.modifiers.shift, self.gui_input.want_capture_mouse
+        )
+
+    def on_mouse_release_event(self, x: int, y: int, button: int) -> None:
+        """A release ends the camera gesture."""
+        self.gui_input.on_mouse_release_event(x, y, button)
+        self.camera_control.release()
+
+    def on_mouse_drag_event(self, x: int, y: int, dx: int, dy: int) -> None:
+        """Drags orbit or pan the camera (if the gesture started outside the panels)."""
+        self.gui_input.on_mouse_drag_event(x, y, dx, dy)
+        self.camera_control.drag(self.session.camera, dx, dy, self.wnd.size[1])
+
+    def on_mouse_scroll_event(self, x_offset: float, y_offset: float) -> None:
+        """The wheel zooms unless it is over a panel."""
+        self.gui_input.on_mouse_scroll_event(x_offset, y_offset)
+        if not self.gui_input.want_capture_mouse:
+            CameraControl.scroll(self.session.camera, y_offset)
+
+    def on_unicode_char_entered(self, char: str) -> None:
+        """Typed text goes to ImGui."""
+        self.gui_input.on_unicode_char_entered(char)
+
+    def on_files_dropped_event(self, x: int, y: int, paths: list[str]) -> None:
+        """Load dropped environments (.exr, .hdr) and meshes, one job each."""
+        for path in paths:
+            self.jobs.submit(
+                f"loading {Path(path).name}", lambda path=path: self.control.open_file(path)
+            )
+
+    def shutdown(self) -> None:
+        """Save the settings, then free the UI and GPU resources (before the window goes)."""
+        self.dialogs.environment.close()
+        self.dialogs.mesh.close()
+        self._save_settings()
+        self.gui.release()
+        implot.destroy_context()
+        imgui.destroy_context()
+        self.session.release()
+
+    def _save_settings(self) -> None:
+        settings = self.settings
+        settings.method = self.method_name
+        for name in self._restored_methods:
+            settings.method_values[name] = self.session.method(name).values.as_dict()
+        settings.display = self.session.renderer.display.as_dict()
+        settings.scene = self.control.scene_spec
+        env, mesh = self.control.environment_path, self.control.mesh_path
+        settings.environment = str(env) if env else None
+        settings.mesh = str(mesh) if mesh else None
+        camera = self.session.camera
+        settings.camera = {
+            "azimuth": camera.azimuth,
+            "elevation": camera.elevation,
+            "distance": camera.distance,
+            "target": [float(v) for v in camera.target],
+        }
+        settings.object_rotation = list(self.control.rotation)
+        settings.turntable = self.control.turntable
+        settings.turntable_speed = self.control.turntable_speed
+        settings.window_size = list(self.wnd.size)
+        settings.imgui_ini = imgui.save_ini_settings_to_memory()
+        try:
+            save_settings(settings)
+        except (OSError, UserError) as exc:
+            print(f"envstudio: warning: settings not saved ({exc})", file=sys.stderr)

@@ -1,0 +1,271 @@
+"""The viewer's ImGui panels: Method, Scene, Stats and Capture.
+
+Panels read and write the objects they are given and keep no copy of their
+state. Work that blocks (loading files) is submitted to :class:`DeferredWork`
+so the status line can say what is happening before it starts.
+
+Default layout (first run; afterwards ImGui's saved layout wins)::
+
+    +---------+---------------------------+---------+
+    | Method  |                           | Stats   |
+    |         |        3D view            |         |
+    +---------+                           +---------+
+    | Scene   |                           | Capture |
+    |         |                           |         |
+    +---------+---------------------------+---------+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from imgui_bundle import imgui, implot
+
+from envstudio.errors import UserError
+from envstudio.methods.base import Method
+from envstudio.methods.parameters import ParameterValues
+from envstudio.render.session import material_values
+from envstudio.scene.graph import Scene
+from envstudio.ui.capture import FORMATS
+from envstudio.ui.file_dialogs import OpenFileDialog
+from envstudio.ui.jobs import DeferredWork
+from envstudio.ui.parameter_widgets import parameter_widgets
+from envstudio.ui.scene_control import SceneControl
+from envstudio.ui.stats import FRAME_SERIES, FrameHistory
+from envstudio.ui.status import StatusLine
+
+SCENE_MESH = "scene's own"
+"""Mesh picker entry bringing back the scene file's reflectors."""
+PANEL_WIDTH = 290.0
+MARGIN = 8.0
+# Share of the column height taken by the upper panel (Method, Stats).
+_UPPER_SHARE = {"Method": 0.42, "Stats": 0.55}
+_COLUMNS = {
+    "Method": ("left", True),
+    "Scene": ("left", False),
+    "Stats": ("right", True),
+    "Capture": ("right", False),
+}
+
+
+def default_layout(display: tuple[float, float]) -> dict[str, tuple[float, float, float, float]]:
+    """Panel name → (x, y, width, height) of the first-run layout in a ``display`` (w, h)."""
+    width, height = display
+    column = height - 3 * MARGIN
+    layout = {}
+    for name, (side, upper) in _COLUMNS.items():
+        x = MARGIN if side == "left" else width - PANEL_WIDTH - MARGIN
+        share = _UPPER_SHARE["Method" if side == "left" else "Stats"]
+        top = round(column * share)
+        if upper:
+            layout[name] = (x, MARGIN, PANEL_WIDTH, top)
+        else:
+            layout[name] = (x, 2 * MARGIN + top, PANEL_WIDTH, column - top)
+    return layout
+
+
+def _begin(name: str) -> bool:
+    """Begin panel ``name`` at its default place on first use; returns whether it is open."""
+    display = imgui.get_io().display_size
+    x, y, w, h = default_layout((display.x, display.y))[name]
+    imgui.set_next_window_pos((x, y), imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size((w, h), imgui.Cond_.first_use_ever)
+    return imgui.begin(name)[0]
+
+
+def method_panel(
+    methods: dict[str, type[Method]], method: Method, scene: Scene, status: StatusLine
+) -> str | None:
+    """Method picker and the parameters of ``method``; returns a newly picked name or None.
+
+    Parameters
+    ----------
+    methods
+        The registered methods, in registration order (keys 1–9 pick the first nine).
+    method
+        The method shown now; its parameters are edited in place.
+    scene
+        The scene, whose first reflector's material "Reset" restores.
+    status
+        Receives rejected values.
+    """
+    picked = None
+    if _begin("Method"):
+        names = list(methods)
+        labels = [
+            f"{cls.title}  [{i + 1}]" if i < 9 else cls.title
+            for i, cls in enumerate(methods.values())
+        ]
+        changed, index = imgui.combo("##method", names.index(method.name), labels)
+        if changed and names[index] != method.name:
+            picked = names[index]
+        imgui.text_wrapped(method.summary)
+        imgui.separator()
+        if list(method.values):
+            parameter_widgets(method.values, status)
+            if imgui.button("Reset"):
+                _reset(method.values, scene)
+            imgui.set_item_tooltip("Defaults, then the scene material's kd, fresnel, exponent.")
+        else:
+            imgui.text_disabled("no parameters")
+    imgui.end()
+    return picked
+
+
+def _reset(values: ParameterValues, scene: Scene) -> None:
+    for param in values:
+        values[param.name] = param.default
+    values.update(material_values(scene), ignore_unknown=True)
+
+
+@dataclass
+class SceneDialogs:
+    """The Scene panel's two "Open..." dialogs."""
+
+    environment: OpenFileDialog
+    mesh: OpenFileDialog
+
+
+def scene_panel(
+    control: SceneControl,
+    display: ParameterValues,
+    dialogs: SceneDialogs,
+    jobs: DeferredWork,
+    status: StatusLine,
+) -> None:
+    """Scene, environment and mesh pickers, display settings, object rotation and turntable.
+
+    The environment and mesh lists end with "Open file...", which shows the
+    native dialog; files can also be dropped onto the window.
+    """
+    if _begin("Scene"):
+        picked = _picker("scene", control.scene_label, control.scenes)
+        if picked:
+            jobs.submit(f"loading scene {picked}", lambda: control.load_scene(picked))
+        picked = _picker(
+            "environment",
+            control.environment_label,
+            control.environments,
+            dialogs.environment,
+            status,
+        )
+        if picked:
+            path = control.environments[picked]
+            jobs.submit(f"loading {picked}", lambda: control.load_environment(path))
+        meshes = {SCENE_MESH: None, **control.meshes}
+        picked = _picker("mesh", control.mesh_label, meshes, dialogs.mesh, status)
+        if picked:
+            path = meshes[picked]
+            jobs.submit(f"loading {picked}", lambda: control.load_mesh(path))
+
+        imgui.separator_text("Display")
+        parameter_widgets(display, status)
+
+        imgui.separator_text("Object")
+        changed, rotation = imgui.slider_float3(
+            "rotation", control.rotation, -180.0, 180.0, "%.0f°", imgui.SliderFlags_.always_clamp
+        )
+        imgui.set_item_tooltip("Rotation of the reflectors about X, Y, Z [deg]")
+        if changed:
+            control.set_rotation(rotation)
+        _, control.turntable = imgui.checkbox("turntable", control.turntable)
+        imgui.set_item_tooltip("Spin the reflectors about +Y")
+        imgui.same_line()
+        imgui.set_next_item_width(-1.0)
+        _, control.turntable_speed = imgui.slider_float(
+            "##speed", control.turntable_speed, -180.0, 180.0, "%.0f°/s"
+        )
+        imgui.set_item_tooltip("Turntable speed [deg/s]")
+    imgui.end()
+
+
+def _picker(
+    label: str,
+    current: str,
+    choices: dict[str, Path | None],
+    dialog: OpenFileDialog | None = None,
+    status: StatusLine | None = None,
+) -> str | None:
+    """A combo of ``choices`` showing ``current``; returns a newly picked name or None.
+
+    With a ``dialog`` the list ends with "Open file...", which opens it (a
+    failure to open goes to ``status``).
+    """
+    picked = None
+    if imgui.begin_combo(label, current):
+        for name in choices:
+            if imgui.selectable(name, name == current)[0] and name != current:
+                picked = name
+        if dialog is not None:
+            imgui.separator()
+            if imgui.selectable(f"Open file...##{label}", False, 0)[0]:
+                try:
+                    dialog.open()
+                except UserError as exc:
+                    status.error(str(exc))
+        imgui.end_combo()
+    if dialog is not None:
+        imgui.set_item_tooltip(f"Pick, open a file, or drop one onto the window ({label})")
+    return picked
+
+
+def stats_panel(history: FrameHistory, render_size: tuple[int, int]) -> None:
+    """Frame time, each pass's time, and their history as a graph (same colours)."""
+    if _begin("Stats"):
+        imgui.text(f"{render_size[0]}x{render_size[1]}, pass times by {history.clock}")
+        for index, (name, ms) in enumerate(history.latest().items()):
+            imgui.text_colored(implot.get_colormap_color(index), f"{name:<12}")
+            imgui.same_line(110.0)
+            fps = f"  ({1e3 / ms:.0f} fps)" if name == FRAME_SERIES and ms > 0 else ""
+            imgui.text(f"{ms:7.2f} ms{fps}")
+        if implot.begin_plot("##history", (-1.0, -1.0), implot.Flags_.no_legend):
+            implot.setup_axes(
+                "", "ms", implot.AxisFlags_.no_tick_labels, implot.AxisFlags_.auto_fit
+            )
+            implot.setup_axis_limits(
+                implot.ImAxis_.x1, 0.0, float(history.length), implot.Cond_.always
+            )
+            for name, values in history.series().items():
+                implot.plot_line(name, values)
+            implot.end_plot()
+    imgui.end()
+
+
+@dataclass
+class CaptureOptions:
+    """What the Capture panel asks for.
+
+    Attributes
+    ----------
+    folder : str
+        Captures folder (the path field).
+    fmt : str
+        ``png`` (as displayed) or ``exr`` (linear HDR, before tone mapping).
+    with_ui : bool
+        PNG only: include the panels.
+    """
+
+    folder: str
+    fmt: str = "png"
+    with_ui: bool = False
+
+
+def capture_panel(options: CaptureOptions) -> bool:
+    """Capture settings; returns True when "Save" was pressed."""
+    pressed = False
+    if _begin("Capture"):
+        _, options.folder = imgui.input_text("folder", options.folder)
+        imgui.set_item_tooltip("Captures folder (created when needed)")
+        for fmt in FORMATS:
+            if imgui.radio_button(fmt.upper(), options.fmt == fmt):
+                options.fmt = fmt
+            imgui.same_line()
+        imgui.begin_disabled(options.fmt == "exr")
+        _, options.with_ui = imgui.checkbox("with UI", options.with_ui)
+        imgui.end_disabled()
+        imgui.set_item_tooltip("PNG only; EXR is the linear frame before tone mapping")
+        pressed = imgui.button("Save capture")
+        imgui.set_item_tooltip("F12 saves a PNG")
+    imgui.end()
+    return pressed

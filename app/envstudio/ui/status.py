@@ -1,0 +1,59 @@
+"""The status line along the bottom of the window: busy work, errors and notes.
+
+Errors are one-line :class:`~envstudio.errors.UserError` messages shown in red
+until dismissed or replaced; a note (a saved capture) stays grey until the next
+one; the busy line names work queued for the next frame.
+"""
+
+from __future__ import annotations
+
+from imgui_bundle import imgui
+
+ERROR_COLOUR = (1.0, 0.35, 0.3, 1.0)
+BUSY_COLOUR = (1.0, 0.8, 0.3, 1.0)
+NOTE_COLOUR = (0.75, 0.75, 0.75, 1.0)
+
+_FLAGS = (
+    imgui.WindowFlags_.no_decoration
+    | imgui.WindowFlags_.no_move
+    | imgui.WindowFlags_.no_saved_settings
+    | imgui.WindowFlags_.no_focus_on_appearing
+    | imgui.WindowFlags_.no_nav
+    | imgui.WindowFlags_.always_auto_resize
+)
+
+
+class StatusLine:
+    """Messages for the user, drawn as a small window at the bottom-left."""
+
+    def __init__(self):
+        self.error_text: str | None = None
+        self.note_text: str | None = None
+        self.busy_text: str | None = None
+
+    def error(self, message: str) -> None:
+        """Show ``message`` (one line) in red."""
+        self.error_text = message
+
+    def note(self, message: str) -> None:
+        """Show ``message`` in grey."""
+        self.note_text = message
+
+    def draw(self) -> None:
+        """Draw the line if there is anything to say (between ``new_frame`` and ``render``)."""
+        if not (self.error_text or self.note_text or self.busy_text):
+            return
+        display = imgui.get_io().display_size
+        imgui.set_next_window_pos((8.0, display.y - 8.0), imgui.Cond_.always, (0.0, 1.0))
+        imgui.set_next_window_bg_alpha(0.85)
+        imgui.begin("##status", None, _FLAGS)
+        if self.busy_text:
+            imgui.text_colored(BUSY_COLOUR, f"busy: {self.busy_text}")
+        if self.error_text:
+            imgui.text_colored(ERROR_COLOUR, self.error_text)
+            imgui.same_line()
+            if imgui.small_button("dismiss"):
+                self.error_text = None
+        if self.note_text:
+            imgui.text_colored(NOTE_COLOUR, self.note_text)
+        imgui.end()
