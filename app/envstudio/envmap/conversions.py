@@ -32,7 +32,7 @@ are stored upright (+Y at the top).
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import moderngl
@@ -179,16 +179,11 @@ def cube_to_paraboloid(
     target.repeat_x, target.repeat_y = False, False
     uniforms = {"u_target_border": float(border)}
     program = _program(programs, _CUBE, _PARABOLOID, cube_tex, (size, size), uniforms)
-    pixels = ctx.buffer(reserve=size * size * 16)
-    scratch = ctx.texture((size, size), 4, dtype="f4")
-    fbo = ctx.framebuffer([scratch])
-    try:
-        for face in _draw_faces(ctx, program, fbo, range(2)):
-            fbo.read_into(pixels, components=4, dtype="f4")
-            target.write(pixels, viewport=(0, 0, face, size, size, 1))
-    finally:
-        for obj in (fbo, scratch, pixels):
-            obj.release()
+
+    def store(face: int, pixels: moderngl.Buffer) -> None:
+        target.write(pixels, viewport=(0, 0, face, size, size, 1))
+
+    _render_faces(ctx, program, size, 2, store)
     return target
 
 
@@ -287,16 +282,16 @@ def read_cube(
 ) -> npt.NDArray[np.float32]:
     """Read one mip level of a cube map back.
 
-    Level 0 is read directly. GL offers no readback of a cube map's other levels
-    through moderngl, so those are drawn: each texel centre is looked up with nearest
-    filtering at exactly that level, which copies the texel.
+    Level 0 is read directly. moderngl reads back only level 0 of a cube map, so other
+    levels are drawn: each texel centre is looked up with nearest filtering at exactly
+    that level, which copies the texel.
 
     Parameters
     ----------
     tex
         Cube map with at least 3 components.
     level
-        Mip level; its faces are max(1, n >> level) texels wide.
+        Mip level; its faces are m = n >> level texels wide.
     programs
         Program library of ``tex.ctx`` for levels above 0; a private one is made and
         released when omitted.
@@ -437,16 +432,7 @@ def _to_cube(
         raise ValueError(f"cube face size must be positive, got {size}")
     cube = ctx.texture_cube((size, size), 4, dtype="f4")
     program = _program(programs, source_kind, _CUBE, source, (size, size), uniforms)
-    pixels = ctx.buffer(reserve=size * size * 16)
-    scratch = ctx.texture((size, size), 4, dtype="f4")
-    fbo = ctx.framebuffer([scratch])
-    try:
-        for face in _draw_faces(ctx, program, fbo, range(6)):
-            fbo.read_into(pixels, components=4, dtype="f4")
-            cube.write(face, pixels)
-    finally:
-        for obj in (fbo, scratch, pixels):
-            obj.release()
+    _render_faces(ctx, program, size, 6, cube.write)
     cube.build_mipmaps()
     cube.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
     return cube
@@ -471,8 +457,7 @@ def _to_2d(
     program = _program(programs, source_kind, target_kind, source, size, uniforms)
     fbo = ctx.framebuffer([target])
     try:
-        for _ in _draw_faces(ctx, program, fbo, range(1)):
-            pass
+        _draw_faces(ctx, program, fbo, 1, lambda face: None)
     finally:
         fbo.release()
     return target
@@ -489,10 +474,13 @@ def _read_cube_level(
     scratch = ctx.texture((m, m), 4, dtype="f4")
     fbo = ctx.framebuffer([scratch])
     faces = []
+
+    def read(face: int) -> None:
+        faces.append(_decode(fbo.read(components=4, dtype="f4"), "f4", (m, m, 4)))
+
     try:
         nearest.use(0)
-        for _ in _draw_faces(ctx, program, fbo, range(6)):
-            faces.append(_decode(fbo.read(components=4, dtype="f4"), "f4", (m, m, 4)))
+        _draw_faces(ctx, program, fbo, 6, read)
     finally:
         nearest.clear(0)
         for obj in (fbo, scratch, nearest):
@@ -534,24 +522,53 @@ def _program(
     return program
 
 
-def _draw_faces(
-    ctx: moderngl.Context, program: moderngl.Program, fbo: moderngl.Framebuffer, faces: range
-) -> Iterator[int]:
-    """Draw the full-screen pass into ``fbo`` once per face, yielding each face after its draw.
+def _render_faces(
+    ctx: moderngl.Context,
+    program: moderngl.Program,
+    size: int,
+    count: int,
+    store: Callable[[int, moderngl.Buffer], None],
+) -> None:
+    """Render faces 0 … count − 1 into a scratch (size, size) RGBA32F target, copying each
+    into a pixel buffer handed to ``store(face, buffer)``, which writes it into place."""
+    pixels = ctx.buffer(reserve=size * size * 16)
+    scratch = ctx.texture((size, size), 4, dtype="f4")
+    fbo = ctx.framebuffer([scratch])
 
-    GL state is set to no blending, depth test or culling for the passes and restored,
-    together with the framebuffer binding, when the iteration ends.
+    def copy(face: int) -> None:
+        fbo.read_into(pixels, components=4, dtype="f4")
+        store(face, pixels)
+
+    try:
+        _draw_faces(ctx, program, fbo, count, copy)
+    finally:
+        for obj in (fbo, scratch, pixels):
+            obj.release()
+
+
+def _draw_faces(
+    ctx: moderngl.Context,
+    program: moderngl.Program,
+    fbo: moderngl.Framebuffer,
+    count: int,
+    after: Callable[[int], None],
+) -> None:
+    """Draw the full-screen pass into ``fbo`` for faces 0 … count − 1, calling ``after(face)``
+    after each draw.
+
+    Blending, depth test and culling are off for the passes; they and the framebuffer
+    binding are restored afterwards.
     """
     quad = FullscreenPass(ctx)
     scope = ctx.scope(fbo, enable_only=moderngl.NOTHING)
     try:
         with scope:
-            for face in faces:
-                face_uniform = program.get("u_target_face", None)
+            face_uniform = program.get("u_target_face", None)
+            for face in range(count):
                 if face_uniform is not None:
                     face_uniform.value = face
                 quad.draw(program)
-                yield face
+                after(face)
     finally:
         scope.release()
         quad.release()

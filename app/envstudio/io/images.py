@@ -42,7 +42,7 @@ def read_image(path: str | os.PathLike) -> npt.NDArray[np.float32]:
         detail = reason[0] if reason else "unknown format"
         raise InputFileError(f"{path}: not a readable image ({detail})")
     try:
-        pixels = inp.read_image(0, 0, 0, -1, "float")
+        pixels = inp.read_image("float")
         error = inp.geterror() if pixels is None else ""
     finally:
         inp.close()

@@ -39,6 +39,8 @@ SCENE_MESH = "scene's own"
 """Mesh picker entry bringing back the scene file's reflectors."""
 PANEL_WIDTH = 290.0
 MARGIN = 8.0
+LABEL_WIDTH = 90.0
+"""Room kept right of the widgets for their labels."""
 # Share of the column height taken by the upper panel (Method, Stats).
 _UPPER_SHARE = {"Method": 0.42, "Stats": 0.55}
 _COLUMNS = {
@@ -71,7 +73,14 @@ def _begin(name: str) -> bool:
     x, y, w, h = default_layout((display.x, display.y))[name]
     imgui.set_next_window_pos((x, y), imgui.Cond_.first_use_ever)
     imgui.set_next_window_size((w, h), imgui.Cond_.first_use_ever)
-    return imgui.begin(name)[0]
+    expanded = imgui.begin(name)[0]
+    imgui.push_item_width(-LABEL_WIDTH)
+    return expanded
+
+
+def _end() -> None:
+    imgui.pop_item_width()
+    imgui.end()
 
 
 def method_panel(
@@ -109,7 +118,7 @@ def method_panel(
             imgui.set_item_tooltip("Defaults, then the scene material's kd, fresnel, exponent.")
         else:
             imgui.text_disabled("no parameters")
-    imgui.end()
+    _end()
     return picked
 
 
@@ -177,7 +186,7 @@ def scene_panel(
             "##speed", control.turntable_speed, -180.0, 180.0, "%.0f°/s"
         )
         imgui.set_item_tooltip("Turntable speed [deg/s]")
-    imgui.end()
+    _end()
 
 
 def _picker(
@@ -227,9 +236,9 @@ def stats_panel(history: FrameHistory, render_size: tuple[int, int]) -> None:
                 implot.ImAxis_.x1, 0.0, float(history.length), implot.Cond_.always
             )
             for name, values in history.series().items():
-                implot.plot_line(name, values)
+                implot.plot_line(name, values, 1.0, float(history.length - len(values)))
             implot.end_plot()
-    imgui.end()
+    _end()
 
 
 @dataclass
@@ -267,5 +276,5 @@ def capture_panel(options: CaptureOptions) -> bool:
         imgui.set_item_tooltip("PNG only; EXR is the linear frame before tone mapping")
         pressed = imgui.button("Save capture")
         imgui.set_item_tooltip("F12 saves a PNG")
-    imgui.end()
+    _end()
     return pressed

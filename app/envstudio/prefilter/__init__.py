@@ -1,0 +1,1 @@
+"""CPU prefiltering of environments: brute-force integrals (the independent references)."""
