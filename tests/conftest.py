@@ -11,7 +11,7 @@ from envstudio.gpu.programs import ProgramLibrary
 
 @pytest.fixture(autouse=True)
 def _strict_numpy():
-    with np.errstate(all="raise"):
+    with np.errstate(all="raise", under="ignore"):
         yield
 
 

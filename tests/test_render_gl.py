@@ -33,9 +33,11 @@ def six_colour_environment(height: int = 64) -> Environment:
     return Environment(img)
 
 
-def sphere_scene(environment: Environment, distance: float = 3.0, fov: float = 45.0) -> Scene:
+def sphere_scene(
+    environment: Environment, distance: float = 3.0, fov: float = 45.0, rings: int = 64
+) -> Scene:
     camera = OrbitCamera(azimuth=0.0, elevation=0.0, distance=distance, fov_y=fov)
-    return Scene(environment, [Node("sphere", uv_sphere(1.0, 64, 128))], camera, "sphere")
+    return Scene(environment, [Node("sphere", uv_sphere(1.0, rings, 2 * rings))], camera, "sphere")
 
 
 def render(session: RenderSession, method: str = "mirror", **params) -> np.ndarray:

@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+from tqdm import tqdm
+
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import write_image
@@ -53,13 +55,29 @@ def run_render(args: argparse.Namespace) -> int:
         apply_params(session, method, args.param)
         if camera:
             session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
-        stats = session.render_offscreen(method, size)
+        stats = render_until_finished(session, method, size)
         pixels = session.read_hdr() if output.suffix.lower() == ".exr" else session.read_ldr()
         write_image(output, pixels)
     finally:
         session.release()
     print(f"{output}: {args.method} {size[0]}x{size[1]} in {stats.total_ms:.1f} ms ({stats.clock})")
     return 0
+
+
+def render_until_finished(session: RenderSession, method: Method, size: tuple[int, int]):
+    """Render frames until the method is finished (one for one-shot methods), with progress."""
+    stats = session.render_offscreen(method, size)
+    if method.finished():
+        return stats
+    with tqdm(desc=method.name, unit="frame", file=sys.stderr, disable=not sys.stderr.isatty(),
+              bar_format="{desc}: {n} frames {elapsed} {postfix}") as bar:
+        while not method.finished():
+            stats = session.render_offscreen(method, size)
+            bar.update(1)
+            bar.set_postfix_str(method.status_line())
+    if method.status_line():
+        print(f"{method.name}: {method.status_line()}", file=sys.stderr)
+    return stats
 
 
 def run_methods(args: argparse.Namespace) -> int:

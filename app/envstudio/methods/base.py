@@ -51,6 +51,14 @@ class Method(ABC):
     def render(self, frame: FrameInputs) -> None:
         """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
 
+    def finished(self) -> bool:
+        """True when another frame would not change the image (progressive methods: converged)."""
+        return True
+
+    def status_line(self) -> str:
+        """One line of progress for the UI and the CLI (empty for one-shot methods)."""
+        return ""
+
     def release(self) -> None:  # noqa: B027  (optional hook: most methods own nothing extra)
         """Free GPU resources the method owns; safe to call twice."""
 

@@ -254,7 +254,7 @@ class Viewer(WindowConfig):
     start
         The scene to show first.
     settings
-        Settings read at start; updated and saved by :meth:`shutdown`.
+        Settings read at start; updated and saved when :meth:`run` ends.
     method
         Method named on the command line (None: the one last shown).
     options
@@ -292,19 +292,20 @@ class Viewer(WindowConfig):
         self.history = FrameHistory()
         self.capture = CaptureOptions(str(default_captures_dir()))
         self._capture_request: CaptureRequest | None = None
+        self._render_error: str | None = None
         self.dialogs = SceneDialogs(
             OpenFileDialog("Open environment", "HDR environments", HDR_SUFFIXES),
             OpenFileDialog("Open mesh", "Meshes", MESH_SUFFIXES),
         )
-        self.frames = 0
+        self.frames_drawn = 0
         keys = wnd.keys
         self._number_keys = [getattr(keys, f"NUMBER_{i}") for i in range(1, 10)]
 
-        problems = self._restore(settings, start)
+        problems = self._restore(settings, start) + self._restore_method(self.method_name)
         for problem in problems:
             print(f"envstudio: warning: {problem}", file=sys.stderr)
         if warnings or problems:
-            self.status.error("; ".join([*warnings, *problems]))
+            self.status.error("\n".join([*warnings, *problems]))
         imgui.create_context()
         imgui.get_io().set_ini_filename(None)
         load_ui_font()
@@ -325,20 +326,28 @@ class Viewer(WindowConfig):
         else:
             problems.append(f"object_rotation = {rotation!r}, expected [x, y, z] degrees")
         self.control.turntable = settings.turntable
-        self.control.turntable_speed = float(settings.turntable_speed)
+        if _is_number(settings.turntable_speed):
+            self.control.turntable_speed = float(settings.turntable_speed)
+        else:
+            problems.append(f"turntable_speed = {settings.turntable_speed!r}, expected deg/s")
         return [f"settings: {problem}" for problem in problems]
 
     def method(self, name: str) -> Method:
         """The session's method ``name``, with its saved parameter values on first use."""
-        method = self.session.method(name)
         if name not in self._restored_methods:
-            self._restored_methods.add(name)
-            saved = self.settings.method_values.get(name, {})
-            for problem in restore_values(method.values, saved):
-                message = f"settings: {name}: {problem}"
-                print(f"envstudio: warning: {message}", file=sys.stderr)
-                self.status.error(message)
-        return method
+            problems = self._restore_method(name)
+            for problem in problems:
+                print(f"envstudio: warning: {problem}", file=sys.stderr)
+            if problems:
+                self.status.error("\n".join(problems))
+        return self.session.method(name)
+
+    def _restore_method(self, name: str) -> list[str]:
+        """Give method ``name`` its saved parameter values; returns what was rejected."""
+        self._restored_methods.add(name)
+        saved = self.settings.method_values.get(name, {})
+        problems = restore_values(self.session.method(name).values, saved)
+        return [f"settings: {name}: {problem}" for problem in problems]
 
     def select_method(self, name: str) -> None:
         """Show method ``name``."""
@@ -348,7 +357,7 @@ class Viewer(WindowConfig):
     def _cycle(self) -> None:
         """``--cycle-methods``: the next method (the first shown at frame 0), printed on stdout."""
         names = list(self.methods)
-        if self.frames > 0:
+        if self.frames_drawn > 0:
             following = names[(names.index(self.method_name) + 1) % len(names)]
             if following == self.method_name:
                 return
@@ -356,7 +365,11 @@ class Viewer(WindowConfig):
         print(f"envstudio: method {self.method_name}", flush=True)
 
     def run(self) -> None:
-        """The main loop: draw and swap until the window is closing."""
+        """The main loop: draw and swap until the window is closing, then save the settings.
+
+        Settings are saved only after a normal end, so a crash cannot persist
+        the state that caused it.
+        """
         self.timer.start()
         while not self.wnd.is_closing:
             now, delta = self.timer.next_frame()
@@ -365,27 +378,33 @@ class Viewer(WindowConfig):
             if not self.wnd.is_closing:
                 self.wnd.swap_buffers()
         self.timer.stop()
+        self._save_settings()
 
     def on_render(self, time: float, frametime: float) -> None:
         """Draw one frame: scene, panels, captures; stop after ``--frames``."""
         self.jobs.run_due()
         self._poll_dialogs()
-        if self.options.cycle_methods and self.frames % CYCLE_FRAMES == 0:
+        if self.options.cycle_methods and self.frames_drawn % CYCLE_FRAMES == 0:
             self._cycle()
         self.control.advance(frametime)
         size = self.wnd.buffer_size
         if size[0] < 1 or size[1] < 1:
             return
         screen = self.ctx.screen
-        stats = self.session.renderer.render(
-            self.session.gpu_scene,
-            self.method(self.method_name),
-            self.session.camera,
-            size,
-            screen,
-            (0, 0, *size),
-        )
-        self.history.add(frametime * 1e3, stats)
+        try:
+            stats = self.session.renderer.render(
+                self.session.gpu_scene,
+                self.method(self.method_name),
+                self.session.camera,
+                size,
+                screen,
+                (0, 0, *size),
+            )
+        except UserError as exc:
+            self._report_render_error(f"{self.method_name}: {exc}")
+        else:
+            self._render_error = None
+            self.history.add(frametime * 1e3, stats)
         request, self._capture_request = self._capture_request, None
         if request and not request.with_ui:
             self._take_capture(request, size)
@@ -401,11 +420,18 @@ class Viewer(WindowConfig):
         if request and request.with_ui:
             self._take_capture(request, size)
 
-        self.frames += 1
-        if self.options.frames and self.frames >= self.options.frames:
+        self.frames_drawn += 1
+        if self.options.frames and self.frames_drawn >= self.options.frames:
             if self.options.screenshot:
                 save(self.options.screenshot, read_framebuffer(screen, size))
             self.wnd.close()
+
+    def _report_render_error(self, message: str) -> None:
+        """Show a method's one-line error (and print it once) instead of quitting."""
+        if message != self._render_error:
+            print(f"envstudio: error: {message}", file=sys.stderr)
+            self.status.error(message)
+            self._render_error = message
 
     def _panels(self, size: tuple[int, int]) -> None:
         method = self.method(self.method_name)
@@ -509,10 +535,9 @@ class Viewer(WindowConfig):
             )
 
     def shutdown(self) -> None:
-        """Save the settings, then free the UI and GPU resources (before the window goes)."""
+        """Free the UI and GPU resources (before the window goes)."""
         self.dialogs.environment.close()
         self.dialogs.mesh.close()
-        self._save_settings()
         self.gui.release()
         implot.destroy_context()
         imgui.destroy_context()

@@ -57,7 +57,7 @@ class OpenFileDialog:
         """Whether a dialog is waiting for the user."""
         return self._dialog is not None
 
-    def open(self, start_folder: Path | None = None) -> None:
+    def open(self) -> None:
         """Show the dialog (no-op if one is already showing).
 
         Raises
@@ -68,7 +68,7 @@ class OpenFileDialog:
         if self._dialog is not None:
             return
         check_dialogs_available()
-        self._dialog = pfd.open_file(self.title, str(start_folder or ""), self._filters)
+        self._dialog = pfd.open_file(self.title, "", self._filters)
 
     def poll(self) -> Path | None:
         """The chosen file once the user answered, else None (also when cancelled)."""

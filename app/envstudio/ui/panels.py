@@ -39,7 +39,7 @@ SCENE_MESH = "scene's own"
 """Mesh picker entry bringing back the scene file's reflectors."""
 PANEL_WIDTH = 290.0
 MARGIN = 8.0
-LABEL_WIDTH = 90.0
+LABEL_WIDTH = 110.0
 """Room kept right of the widgets for their labels."""
 # Share of the column height taken by the upper panel (Method, Stats).
 _UPPER_SHARE = {"Method": 0.42, "Stats": 0.55}
@@ -103,9 +103,10 @@ def method_panel(
     if _begin("Method"):
         names = list(methods)
         labels = [
-            f"{cls.title}  [{i + 1}]" if i < 9 else cls.title
+            f"{i + 1}: {cls.title}" if i < 9 else cls.title
             for i, cls in enumerate(methods.values())
         ]
+        imgui.set_next_item_width(-1.0)
         changed, index = imgui.combo("##method", names.index(method.name), labels)
         if changed and names[index] != method.name:
             picked = names[index]
@@ -199,7 +200,7 @@ def _picker(
     """A combo of ``choices`` showing ``current``; returns a newly picked name or None.
 
     With a ``dialog`` the list ends with "Open file...", which opens it (a
-    failure to open goes to ``status``).
+    failure to open goes to ``status``); it is greyed out while the dialog shows.
     """
     picked = None
     if imgui.begin_combo(label, current):
@@ -208,7 +209,8 @@ def _picker(
                 picked = name
         if dialog is not None:
             imgui.separator()
-            if imgui.selectable(f"Open file...##{label}", False, 0)[0]:
+            waiting = imgui.SelectableFlags_.disabled if dialog.is_open else 0
+            if imgui.selectable(f"Open file...##{label}", False, waiting)[0]:
                 try:
                     dialog.open()
                 except UserError as exc:
@@ -222,10 +224,13 @@ def _picker(
 def stats_panel(history: FrameHistory, render_size: tuple[int, int]) -> None:
     """Frame time, each pass's time, and their history as a graph (same colours)."""
     if _begin("Stats"):
-        imgui.text(f"{render_size[0]}x{render_size[1]}, pass times by {history.clock}")
-        for index, (name, ms) in enumerate(history.latest().items()):
-            imgui.text_colored(implot.get_colormap_color(index), f"{name:<12}")
-            imgui.same_line(110.0)
+        clock = f", pass times by {history.clock}" if history.clock else ""
+        imgui.text(f"{render_size[0]}x{render_size[1]}{clock}")
+        latest = history.latest()
+        column = max((imgui.calc_text_size(name).x for name in latest), default=0.0)
+        for index, (name, ms) in enumerate(latest.items()):
+            imgui.text_colored(implot.get_colormap_color(index), name)
+            imgui.same_line(imgui.get_style().window_padding.x + column + 12.0)
             fps = f"  ({1e3 / ms:.0f} fps)" if name == FRAME_SERIES and ms > 0 else ""
             imgui.text(f"{ms:7.2f} ms{fps}")
         if implot.begin_plot("##history", (-1.0, -1.0), implot.Flags_.no_legend):

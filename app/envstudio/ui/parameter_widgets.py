@@ -5,7 +5,9 @@ the user changes it, assigns it back (``values[name] = v``), where the
 declaration validates it::
 
     float   slider_float over [minimum, maximum], logarithmic when ``log``
-    int     slider_int over [minimum, maximum]
+            (drag_float without a range)
+    int     slider_int over [minimum, maximum], logarithmic when ``log``
+            (drag_int without a range)
     bool    checkbox
     choice  combo of ``choices``
 
@@ -21,6 +23,7 @@ from envstudio.methods.parameters import Parameter, ParameterValues
 from envstudio.ui.status import StatusLine
 
 _CLAMP = imgui.SliderFlags_.always_clamp
+_FLOAT = "%.4g"
 
 
 def tooltip(param: Parameter) -> str:
@@ -29,8 +32,10 @@ def tooltip(param: Parameter) -> str:
     return f"{param.help}{unit}".strip()
 
 
-def parameter_widget(values: ParameterValues, param: Parameter) -> bool:
-    """Draw the widget of ``param``; returns True if the user changed its value.
+def parameter_widget(values: ParameterValues, param: Parameter) -> None:
+    """Draw the widget of ``param`` and assign the value the user gives it.
+
+    Numbers declared without a range get a drag field instead of a slider.
 
     Raises
     ------
@@ -39,15 +44,21 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> bool:
     """
     label = param.name
     current = values[param.name]
-    if param.kind == "float":
+    bounded = param.minimum is not None and param.maximum is not None
+    if param.kind == "float" and bounded:
         flags = _CLAMP | (imgui.SliderFlags_.logarithmic if param.log else 0)
         changed, value = imgui.slider_float(
-            label, float(current), float(param.minimum), float(param.maximum), "%.3f", flags
+            label, float(current), float(param.minimum), float(param.maximum), _FLOAT, flags
+        )
+    elif param.kind == "float":
+        changed, value = imgui.drag_float(label, float(current), 0.01, 0.0, 0.0, _FLOAT)
+    elif param.kind == "int" and bounded:
+        flags = _CLAMP | (imgui.SliderFlags_.logarithmic if param.log else 0)
+        changed, value = imgui.slider_int(
+            label, int(current), int(param.minimum), int(param.maximum), "%d", flags
         )
     elif param.kind == "int":
-        changed, value = imgui.slider_int(
-            label, int(current), int(param.minimum), int(param.maximum), "%d", _CLAMP
-        )
+        changed, value = imgui.drag_int(label, int(current))
     elif param.kind == "bool":
         changed, value = imgui.checkbox(label, bool(current))
     else:
@@ -59,21 +70,12 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> bool:
         imgui.set_item_tooltip(text)
     if changed:
         values[param.name] = value
-    return changed
 
 
-def parameter_widgets(values: ParameterValues, status: StatusLine) -> bool:
-    """Draw a widget per declared parameter; a rejected value goes to ``status``.
-
-    Returns
-    -------
-    bool
-        Whether any value changed.
-    """
-    changed = False
+def parameter_widgets(values: ParameterValues, status: StatusLine) -> None:
+    """Draw a widget per declared parameter; a rejected value goes to ``status``."""
     for param in values:
         try:
-            changed |= parameter_widget(values, param)
+            parameter_widget(values, param)
         except ParameterError as exc:
             status.error(str(exc))
-    return changed

@@ -1,8 +1,9 @@
 """The status line along the bottom of the window: busy work, errors and notes.
 
-Errors are one-line :class:`~envstudio.errors.UserError` messages shown in red
-until dismissed or replaced; a note (a saved capture) stays grey until the next
-one; the busy line names work queued for the next frame.
+Errors are one-line :class:`~envstudio.errors.UserError` messages (several on
+separate lines) shown in red until dismissed or replaced; a note (a saved
+capture) stays grey until the next one; the busy line names work queued for
+the next frame.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from imgui_bundle import imgui
 ERROR_COLOUR = (1.0, 0.35, 0.3, 1.0)
 BUSY_COLOUR = (1.0, 0.8, 0.3, 1.0)
 NOTE_COLOUR = (0.75, 0.75, 0.75, 1.0)
+_MARGIN = 8.0
 
 _FLAGS = (
     imgui.WindowFlags_.no_decoration
@@ -32,7 +34,7 @@ class StatusLine:
         self.busy_text: str | None = None
 
     def error(self, message: str) -> None:
-        """Show ``message`` (one line) in red."""
+        """Show ``message`` in red (one line per problem; long lines wrap)."""
         self.error_text = message
 
     def note(self, message: str) -> None:
@@ -44,9 +46,13 @@ class StatusLine:
         if not (self.error_text or self.note_text or self.busy_text):
             return
         display = imgui.get_io().display_size
-        imgui.set_next_window_pos((8.0, display.y - 8.0), imgui.Cond_.always, (0.0, 1.0))
+        imgui.set_next_window_pos((_MARGIN, display.y - _MARGIN), imgui.Cond_.always, (0.0, 1.0))
+        imgui.set_next_window_size_constraints(
+            (0.0, 0.0), (max(display.x - 2 * _MARGIN, 1.0), max(display.y / 2, 1.0))
+        )
         imgui.set_next_window_bg_alpha(0.85)
         imgui.begin("##status", None, _FLAGS)
+        imgui.push_text_wrap_pos(display.x - 4 * _MARGIN)
         if self.busy_text:
             imgui.text_colored(BUSY_COLOUR, f"busy: {self.busy_text}")
         if self.error_text:
@@ -56,4 +62,5 @@ class StatusLine:
                 self.error_text = None
         if self.note_text:
             imgui.text_colored(NOTE_COLOUR, self.note_text)
+        imgui.pop_text_wrap_pos()
         imgui.end()

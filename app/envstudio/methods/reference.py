@@ -1,0 +1,297 @@
+"""Method ``reference``: the rendering equation (seed 000 eq. 1) integrated per pixel.
+
+A progressive GPU estimator: every frame adds one batch of ``samples``
+multiple-importance-sampled estimates per reflector pixel (cosine / Phong /
+GGX lobe sampling combined with environment sampling by luminance, balance
+heuristic), accumulated with additive blending in float targets together with
+the squares of the batch means, so each pixel carries its own standard error.
+
+Convergence is judged by the successive-half criterion: at every doubling of
+the batch count the estimate I_n is compared with I_{n/2}; the reference is
+converged when RMS(I_n − I_{n/2}) / RMS(I_n) over the reflector pixels falls
+below ``tolerance`` (0.1 % by default). The accumulation restarts whenever the
+camera, the parameters, the environment, the transforms or the size change.
+
+Shaders: shaders/reference/accumulate.glsl (estimator), sampling.glsl,
+radiance.glsl, resolve.glsl.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core.env_sampling import EnvironmentDistribution
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.base import Method, register
+from envstudio.methods.context import FrameInputs, GpuScene
+from envstudio.methods.parameters import Parameter
+from envstudio.methods.tracing import TraceData
+
+MODELS = ("phong", "microfacet")
+
+
+@dataclass
+class ConvergenceStatus:
+    """Where the accumulation stands.
+
+    Attributes
+    ----------
+    batches : int
+        Frames accumulated since the last restart.
+    samples : int
+        Estimates per pixel (batches × samples per batch).
+    rms_change : float or None
+        RMS(I_n − I_{n/2}) / RMS(I_n) at the last doubling (None before the second).
+    converged : bool
+        ``rms_change`` is below the tolerance.
+    """
+
+    batches: int = 0
+    samples: int = 0
+    rms_change: float | None = None
+    converged: bool = False
+
+    def describe(self) -> str:
+        """One line for the UI and the CLI."""
+        change = "—" if self.rms_change is None else f"{100 * self.rms_change:.3f} %"
+        state = "converged" if self.converged else "converging"
+        return f"{self.samples} spp, half-change {change}: {state}"
+
+
+class _EnvironmentTables:
+    """GPU copies of the luminance-sampling tables of one environment."""
+
+    def __init__(self, ctx: moderngl.Context, radiance: npt.NDArray[np.float32]):
+        dist = EnvironmentDistribution.from_latlong(radiance)
+        h, w = dist.shape
+        p_uv = dist.weights / dist.weights.sum() * (w * h)
+        self.textures = [
+            _r32f(ctx, dist.marginal_cdf[None, :]),
+            _r32f(ctx, dist.conditional_cdf),
+            _r32f(ctx, p_uv),
+        ]
+
+    def bind(self, program: moderngl.Program, first_unit: int) -> None:
+        for offset, (name, tex) in enumerate(
+            zip(("u_env_marginal", "u_env_conditional", "u_env_pdf_uv"), self.textures, strict=True)
+        ):
+            tex.use(location=first_unit + offset)
+            set_uniform(program, name, first_unit + offset)
+
+    def release(self) -> None:
+        for tex in self.textures:
+            tex.release()
+        self.textures = []
+
+
+def _r32f(ctx: moderngl.Context, array: npt.ArrayLike) -> moderngl.Texture:
+    data = np.ascontiguousarray(array, dtype=np.float32)
+    tex = ctx.texture((data.shape[1], data.shape[0]), 1, data.tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    return tex
+
+
+@register
+class ReferenceMethod(Method):
+    """Ground truth by progressive Monte Carlo integration of the rendering equation."""
+
+    name = "reference"
+    title = "Reference (Monte Carlo)"
+    summary = "Rendering equation per pixel by MIS importance sampling, accumulated to convergence."
+    parameters = (
+        Parameter("model", "choice", "phong", choices=MODELS, rebuild=False,
+                  help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX."),
+        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."),
+        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo."),
+        Parameter("phong_exponent", "float", 200.0, 1.0, 10000.0, "N",
+                  "Phong exponent (microfacet: alpha = sqrt(2 / (4N + 2))).", log=True),
+        Parameter("trace", "bool", True, rebuild=True,
+                  help="Trace the scene's triangles: self-occlusion, local and self-reflections."),
+        Parameter("samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."),
+        Parameter("max_samples", "int", 8192, 1, 10_000_000, "spp",
+                  "Sample budget per pixel; beyond it the result is reported as not converged."),
+        Parameter("tolerance", "float", 0.001, 1e-5, 0.1, "",
+                  "Converged when the successive-half RMS change is below this.", log=True),
+    )
+
+    def __init__(self, ctx, programs):
+        super().__init__(ctx, programs)
+        self.status = ConvergenceStatus()
+        self._tables: _EnvironmentTables | None = None
+        self._tables_revision = -1
+        self._trace: TraceData | None = None
+        self._trace_key: tuple | None = None
+        self._sum: moderngl.Texture | None = None
+        self._sum_sq: moderngl.Texture | None = None
+        self._depth: moderngl.Renderbuffer | None = None
+        self._fbo: moderngl.Framebuffer | None = None
+        self._depth_fbo: moderngl.Framebuffer | None = None
+        self._key: tuple | None = None
+        self._snapshot: npt.NDArray[np.float64] | None = None
+
+    def finished(self) -> bool:
+        """Converged, or the sample budget is spent."""
+        return self.status.converged or self.status.samples >= int(self.values["max_samples"])
+
+    def status_line(self) -> str:
+        """Samples per pixel, the last successive-half change and the state."""
+        line = self.status.describe()
+        if not self.status.converged and self.status.samples >= int(self.values["max_samples"]):
+            line += " (budget spent: NOT converged)"
+        return line
+
+    # -- rendering ---------------------------------------------------------------------------
+
+    def render(self, frame: FrameInputs) -> None:
+        scene = frame.scene
+        self._prepare(scene, frame)
+        if not self.finished():
+            with frame.timer.measure("reference.accumulate"):
+                self._accumulate(frame)
+            self.status.batches += 1
+            self.status.samples = self.status.batches * int(self.values["samples"])
+            if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
+                self._check_convergence()
+        frame.target.use()
+        with frame.timer.measure("reference.resolve"):
+            program = self.programs.get("reference/resolve.glsl")
+            self._sum.use(location=0)
+            set_uniform(program, "u_sum", 0)
+            self._draw_reflectors(program, frame)
+
+    def _prepare(self, scene: GpuScene, frame: FrameInputs) -> None:
+        if self._tables_revision != scene.environment_revision:
+            if self._tables is not None:
+                self._tables.release()
+            self._tables = _EnvironmentTables(self.ctx, scene.scene.environment.radiance)
+            self._tables_revision = scene.environment_revision
+        geometry = (id(scene), tuple((id(g.node), g.model.tobytes()) for g in scene.nodes))
+        if self.values["trace"] and geometry != self._trace_key:
+            if self._trace is not None:
+                self._trace.release()
+            self._trace = TraceData(self.ctx, scene)
+            self._trace_key = geometry
+        key = (
+            frame.size, frame.view.tobytes(), frame.projection.tobytes(), self.values.revision,
+            scene.environment_revision, tuple(g.model.tobytes() for g in scene.reflectors()),
+        )
+        if key != self._key:
+            self._key = key
+            self._ensure_targets(frame.size)
+            self._fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self.status = ConvergenceStatus()
+            self._snapshot = None
+
+    def _accumulate(self, frame: FrameInputs) -> None:
+        trace = bool(self.values["trace"])
+        program = self.programs.get("reference/accumulate.glsl", {"TRACE_LOCAL": int(trace)})
+        scene = frame.scene
+        scene.latlong.use(location=0)
+        set_uniform(program, "u_latlong", 0)
+        self._tables.bind(program, 1)
+        if trace:
+            self._trace.bind(program, 4)
+            set_uniform(program, "u_sh9", scene.sh9)
+        set_uniform(program, "u_camera_position", frame.camera_position)
+        set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
+        for name in ("kd", "fresnel", "phong_exponent"):
+            set_uniform(program, f"u_{name}", float(self.values[name]))
+        set_uniform(program, "u_samples", int(self.values["samples"]))
+        set_uniform(program, "u_frame", self.status.batches)
+        # Depth pre-pass, then shade only the nearest surface (depth <=): with additive
+        # blending every fragment that passed a plain depth test would count.
+        self._depth_fbo.clear(depth=1.0)
+        self._depth_fbo.use()
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self._draw_reflectors(self.programs.get("reference/resolve.glsl"), frame)
+        self._fbo.use()
+        self.ctx.depth_func = "<="
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
+        self.ctx.blend_equation = moderngl.FUNC_ADD
+        self._draw_reflectors(program, frame)
+        self.ctx.disable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.DEFAULT_BLENDING
+        self.ctx.depth_func = "<"
+
+    def _draw_reflectors(self, program: moderngl.Program, frame: FrameInputs) -> None:
+        set_uniform(program, "u_view", frame.view)
+        set_uniform(program, "u_projection", frame.projection)
+        for gpu_node in frame.scene.reflectors():
+            set_uniform(program, "u_model", gpu_node.model)
+            set_uniform(program, "u_normal_matrix", gpu_node.normal)
+            gpu_node.mesh.render(program)
+
+    # -- results -----------------------------------------------------------------------------
+
+    def estimate(self) -> npt.NDArray[np.float32]:
+        """(h, w, 3) mean radiance of the accumulation, row 0 at the top (0 off the reflectors)."""
+        total, _ = self._read()
+        count = np.maximum(total[..., 3:], 1.0)
+        return total[..., :3] / count
+
+    def standard_error(self) -> npt.NDArray[np.float32]:
+        """(h, w, 3) standard error of :meth:`estimate` from the spread of the batch means."""
+        total, squares = self._read()
+        k = total[..., 3:]
+        safe = np.maximum(k, 2.0)
+        mean = total[..., :3] / safe
+        variance = np.maximum(squares[..., :3] / safe - mean**2, 0.0) * safe / (safe - 1.0)
+        return np.where(k >= 2, np.sqrt(variance / safe), np.float32(np.inf))
+
+    def coverage(self) -> npt.NDArray[np.bool_]:
+        """(h, w) True where the reflectors have samples."""
+        total, _ = self._read()
+        return total[..., 3] > 0
+
+    def _read(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        w, h = self._sum.size
+        out = []
+        for tex in (self._sum, self._sum_sq):
+            data = np.frombuffer(tex.read(), dtype=np.float32).reshape(h, w, 4)[::-1]
+            out.append(data.copy())
+        return out[0], out[1]
+
+    def _check_convergence(self) -> None:
+        current = self.estimate().astype(np.float64)
+        mask = self.coverage()
+        if self._snapshot is not None and mask.any():
+            diff = current[mask] - self._snapshot[mask]
+            norm = np.sqrt(np.mean(current[mask] ** 2))
+            change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else 0.0
+            self.status.rms_change = change
+            self.status.converged = change < float(self.values["tolerance"])
+        self._snapshot = current
+
+    # -- resources ---------------------------------------------------------------------------
+
+    def _ensure_targets(self, size: tuple[int, int]) -> None:
+        if self._sum is not None and self._sum.size == tuple(size):
+            return
+        self._release_targets()
+        self._sum = self.ctx.texture(size, 4, dtype="f4")
+        self._sum_sq = self.ctx.texture(size, 4, dtype="f4")
+        self._depth = self.ctx.depth_renderbuffer(size)
+        self._fbo = self.ctx.framebuffer([self._sum, self._sum_sq], self._depth)
+        self._depth_fbo = self.ctx.framebuffer(depth_attachment=self._depth)
+
+    def _release_targets(self) -> None:
+        for obj in (self._depth_fbo, self._fbo, self._sum, self._sum_sq, self._depth):
+            if obj is not None:
+                obj.release()
+        self._depth_fbo = self._fbo = self._sum = self._sum_sq = self._depth = None
+
+    def release(self) -> None:
+        """Free targets and sampling tables; safe to call twice."""
+        self._release_targets()
+        if self._tables is not None:
+            self._tables.release()
+            self._tables = None
+        if self._trace is not None:
+            self._trace.release()
+            self._trace = None
+        self._key = self._trace_key = None

@@ -1,0 +1,117 @@
+#version 330 core
+// Method `reference`, accumulation pass: each frame adds one batch of
+// u_samples multiple-importance-sampled estimates (balance heuristic, Veach
+// 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel.
+//
+// Model 0 (seed 000 eq. 8): L_o = (1 - F) k_d D + F P with Schlick F(n.v)
+//   D = 1/pi  int L(l) max(n.l, 0) dl         (eq. 3-4: cosine lobe + environment sampling)
+//   P = (N+1)/2pi int L(l) max(r.l, 0)^N dl   (eq. 7: Phong lobe + environment sampling)
+// The Phong lobe is integrated over the hemisphere about r, as eq. 7's
+// reparameterised (prefiltered) map does, not clipped by the surface.
+// Model 1 (microfacet): k_d/pi (1 - F(n.v)) + GGX D G2 F(v.h) / (4 n.l n.v),
+//   alpha = sqrt(2 / (4N + 2)) (a Phong exponent N is about a Blinn exponent 4N).
+//
+// Outputs (additive blending): sum of batch means (rgb, a = batch count) and
+// sum of squared batch means, from which the method reports a standard error.
+#if defined VERTEX_SHADER
+#include "common/mesh_vs.glsl"
+#elif defined FRAGMENT_SHADER
+#include "common/random.glsl"
+#include "common/fresnel.glsl"
+#include "reference/sampling.glsl"
+#include "reference/radiance.glsl"
+
+uniform vec3 u_camera_position;
+uniform int u_brdf_model;
+uniform float u_kd;
+uniform float u_fresnel;
+uniform float u_phong_exponent;
+uniform int u_samples;
+uniform int u_frame;
+
+in vec3 v_world_position;
+in vec3 v_world_normal;
+layout(location = 0) out vec4 f_sum;
+layout(location = 1) out vec4 f_sum_sq;
+
+float balance(float a, float b) { return a / max(a + b, 1e-30); }
+
+// One MIS sample pair for D (cosine lobe) and P (Phong lobe).
+vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
+    float N = u_phong_exponent;
+    float F = schlick_fresnel(u_fresnel, dot(n, v));
+    vec3 diffuse = vec3(0.0);
+    vec3 glossy = vec3(0.0);
+    // cosine-lobe sample (pdf = f)
+    vec3 l = sample_cosine(n, random2(pixel, uint(u_frame), 4u * index));
+    float pdf_f = max(dot(n, l), 0.0) / PI;
+    if (pdf_f > 0.0) diffuse += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
+    // environment sample for D
+    l = sample_environment(random2(pixel, uint(u_frame), 4u * index + 1u));
+    float pdf_e = env_pdf(l);
+    float f = max(dot(n, l), 0.0) / PI;
+    if (f > 0.0) diffuse += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
+    // Phong-lobe sample (pdf = lobe)
+    l = sample_phong(r, N, random2(pixel, uint(u_frame), 4u * index + 2u));
+    pdf_f = phong_lobe(r, l, N);
+    if (pdf_f > 0.0) glossy += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
+    // environment sample for P
+    l = sample_environment(random2(pixel, uint(u_frame), 4u * index + 3u));
+    pdf_e = env_pdf(l);
+    f = phong_lobe(r, l, N);
+    if (f > 0.0) glossy += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
+    return (1.0 - F) * u_kd * diffuse + F * glossy;
+}
+
+// One MIS sample pair for the microfacet BRDF times the cosine.
+vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
+    float alpha = sqrt(2.0 / (4.0 * u_phong_exponent + 2.0));
+    float n_dot_v = max(dot(n, v), 1e-4);
+    float F_view = schlick_fresnel(u_fresnel, n_dot_v);
+    vec3 result = vec3(0.0);
+    for (int technique = 0; technique < 2; ++technique) {
+        vec2 xi = random2(pixel, uint(u_frame), 4u * index + uint(technique));
+        vec3 l;
+        if (technique == 0) {
+            vec3 h = sample_ggx_half(n, alpha, xi);
+            l = reflect(-v, h);
+        } else {
+            l = sample_environment(xi);
+        }
+        float n_dot_l = dot(n, l);
+        if (n_dot_l <= 0.0) continue;
+        vec3 h = normalize(l + v);
+        float n_dot_h = max(dot(n, h), 0.0);
+        float v_dot_h = max(dot(v, h), 1e-4);
+        float D = ggx_d(n_dot_h, alpha);
+        float pdf_brdf = D * n_dot_h / (4.0 * v_dot_h);
+        float pdf_env = env_pdf(l);
+        float specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
+                         / (4.0 * n_dot_l * n_dot_v);
+        float diffuse = u_kd / PI * (1.0 - F_view);
+        float f = (specular + diffuse) * n_dot_l;
+        float pdf = technique == 0 ? pdf_brdf : pdf_env;
+        float other = technique == 0 ? pdf_env : pdf_brdf;
+        // Balance weights sum to 1 wherever the environment pdf is positive (everywhere),
+        // so the diffuse part stays unbiased though the GGX technique ignores it.
+        if (pdf > 0.0) result += balance(pdf, other) * f * incident(p, n, l) / pdf;
+    }
+    return result;
+}
+
+void main() {
+    vec3 n = normalize(v_world_normal);
+    vec3 v = normalize(u_camera_position - v_world_position);
+    if (dot(n, v) < 0.0) n = -n;
+    vec3 r = reflect(-v, n);
+    uvec2 pixel = uvec2(gl_FragCoord.xy);
+    vec3 batch = vec3(0.0);
+    for (int i = 0; i < u_samples; ++i) {
+        batch += u_brdf_model == 0 ? sample_eq8(v_world_position, n, v, r, pixel, uint(i))
+                              : sample_microfacet(v_world_position, n, v, pixel, uint(i));
+    }
+    batch /= float(u_samples);
+    f_sum = vec4(batch, 1.0);
+    f_sum_sq = vec4(batch * batch, 1.0);
+}
+#endif

@@ -1,0 +1,100 @@
+// Ray tracing of the scene's triangles for the reference (local reflections,
+// self-occlusion, self-reflection). BVH layout of app/envstudio/core/bvh.py,
+// uploaded by app/envstudio/methods/tracing.py into RGBA32F textures of
+// width TRACE_TEXTURE_WIDTH:
+//   nodes:     2 texels per node: (min.xyz, right child or first triangle),
+//              (max.xyz, triangle count; 0 for interior nodes)
+//   triangles: 7 texels per triangle: v0, v1, v2, n0, n1, n2, (albedo.rgb, kind)
+//              kind 0 = local diffuse object, 1 = reflector
+#include "common/sh.glsl"
+
+#define TRACE_TEXTURE_WIDTH 4096
+#define TRACE_STACK 48
+
+uniform sampler2D u_bvh_nodes;
+uniform sampler2D u_bvh_triangles;
+uniform vec3 u_sh9[9];
+uniform float u_ray_offset;
+
+vec4 trace_fetch(sampler2D s, int i) {
+    return texelFetch(s, ivec2(i % TRACE_TEXTURE_WIDTH, i / TRACE_TEXTURE_WIDTH), 0);
+}
+
+// Moller-Trumbore; returns t > 0 or -1, barycentrics in uv.
+float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
+    vec3 e1 = b - a;
+    vec3 e2 = c - a;
+    vec3 p = cross(d, e2);
+    float det = dot(e1, p);
+    if (abs(det) < 1e-12) return -1.0;
+    float inv = 1.0 / det;
+    vec3 s = o - a;
+    uv.x = dot(s, p) * inv;
+    vec3 q = cross(s, e1);
+    uv.y = dot(d, q) * inv;
+    float t = dot(e2, q) * inv;
+    if (uv.x < 0.0 || uv.y < 0.0 || uv.x + uv.y > 1.0 || t <= 1e-6) return -1.0;
+    return t;
+}
+
+bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 bary) {
+    vec3 inv = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    int stack[TRACE_STACK];
+    int top = 0;
+    stack[top++] = 0;
+    t_hit = 1e30;
+    tri_hit = -1;
+    while (top > 0) {
+        int node = stack[--top];
+        vec4 a = trace_fetch(u_bvh_nodes, 2 * node);
+        vec4 b = trace_fetch(u_bvh_nodes, 2 * node + 1);
+        vec3 t0 = (a.xyz - o) * inv;
+        vec3 t1 = (b.xyz - o) * inv;
+        vec3 tmin = min(t0, t1);
+        vec3 tmax = max(t0, t1);
+        float near = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+        float far = min(min(tmax.x, tmax.y), min(tmax.z, t_hit));
+        if (far < near) continue;
+        int link = int(a.w);
+        int count = int(b.w);
+        if (count > 0) {
+            for (int k = link; k < link + count; ++k) {
+                vec2 uv;
+                float t = ray_triangle(o, d, trace_fetch(u_bvh_triangles, 7 * k).xyz,
+                                       trace_fetch(u_bvh_triangles, 7 * k + 1).xyz,
+                                       trace_fetch(u_bvh_triangles, 7 * k + 2).xyz, uv);
+                if (t > 0.0 && t < t_hit) {
+                    t_hit = t;
+                    tri_hit = k;
+                    bary = uv;
+                }
+            }
+        } else if (top + 2 <= TRACE_STACK) {
+            stack[top++] = link;
+            stack[top++] = node + 1;
+        }
+    }
+    return tri_hit >= 0;
+}
+
+// Radiance arriving at p from direction l. Directions below the surface (the
+// part of the eq. 7 lobe under the horizon) see the environment, as in the
+// prefiltered-map methods. A local object returns its diffuse radiance
+// albedo/pi * E_sh9(n) (as the frame draws it); a reflector hit returns one
+// mirror bounce into the environment.
+vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
+    if (dot(n, l) <= 0.0) return environment_radiance(l);
+    float t;
+    int tri;
+    vec2 uv;
+    if (!trace_closest(p + n * u_ray_offset, l, t, tri, uv)) return environment_radiance(l);
+    vec3 hit_normal = normalize((1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
+                                + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
+                                + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz);
+    if (dot(hit_normal, l) > 0.0) hit_normal = -hit_normal;
+    vec4 info = trace_fetch(u_bvh_triangles, 7 * tri + 6);
+    if (info.a < 0.5) {
+        return info.rgb / 3.14159265358979 * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
+    }
+    return environment_radiance(reflect(l, hit_normal));
+}

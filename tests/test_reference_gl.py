@@ -1,0 +1,133 @@
+"""The reference estimator against analytic values and independent NumPy integrals."""
+
+import numpy as np
+import pytest
+
+from envstudio.core import latlong
+from envstudio.core.fresnel import schlick
+from envstudio.prefilter import brute_force
+from envstudio.render.session import RenderSession
+from envstudio.scene.environment import Environment
+from test_render_gl import sphere_geometry, sphere_scene
+
+SIZE = (40, 40)
+
+
+def converge(session: RenderSession, batches: int, **params):
+    method = session.method("reference")
+    method.values.update({"trace": False, **params})
+    session.renderer.display["background"] = False
+    for _ in range(batches):
+        session.render_offscreen(method, SIZE)
+    hit, normal, view = sphere_geometry(session.camera, SIZE)
+    inside = hit & method.coverage()
+    # keep pixels whose footprint lies on the sphere (centre hit and away from the silhouette)
+    inside &= np.sum(normal * view, -1) > 0.25
+    return method, inside, normal, view
+
+
+def test_constant_environment_gives_kd_L_and_L(gl_ctx):
+    colour = np.array([0.2, 0.5, 1.0])
+    session = RenderSession(sphere_scene(Environment.constant(colour), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session, 32, kd=0.5, fresnel=0.1, phong_exponent=50.0, samples=64
+    )
+    F = schlick(0.1, np.sum(normal * view, -1))
+    expected = ((1 - F) * 0.5 + F)[..., None] * colour  # (1 - F) k_d L + F L (eq. 8)
+    est, se = method.estimate()[inside], method.standard_error()[inside]
+    ratio = est / expected[inside]
+    assert abs(ratio.mean() - 1) < 0.002, ratio.mean()
+    assert np.all(np.abs(est - expected[inside]) < 5 * se + 1e-4)
+    assert np.median(se / est) < 0.01, "the estimate is not within 1 % per pixel"
+    session.release()
+
+
+PATCH = {"height": 64, "rows": (31, 33), "cols": (116, 118), "radiance": 50.0}
+
+
+def bright_patch():
+    img = np.zeros((PATCH["height"], 2 * PATCH["height"], 3), np.float32)
+    (r0, r1), (c0, c1) = PATCH["rows"], PATCH["cols"]
+    img[r0:r1, c0:c1] = PATCH["radiance"]
+    return img
+
+
+def analytic_patch_lobe(reflections, exponent, sub=64):
+    """(N+1)/2pi ∫_patch (r.l)^N L dl, integrated over each texel's area by a fine midpoint rule."""
+    h = PATCH["height"]
+    (r0, r1), (c0, c1) = PATCH["rows"], PATCH["cols"]
+    v = (r0 + (np.arange((r1 - r0) * sub) + 0.5) / sub) / h
+    u = (c0 + (np.arange((c1 - c0) * sub) + 0.5) / sub) / (2 * h)
+    uu, vv = np.meshgrid(u, v)
+    dirs = latlong.uv_to_direction(np.stack([uu, vv], -1)).reshape(-1, 3)
+    # dω = 2π² sin θ du dv (lat-long convention)
+    d_omega = 2 * np.pi**2 * np.sin(np.pi * vv.ravel()) / (sub * h) / (sub * 2 * h)
+    cos = np.maximum(reflections.reshape(-1, 3) @ dirs.T, 0.0)
+    lobe = (exponent + 1) / (2 * np.pi) * cos**exponent @ d_omega * PATCH["radiance"]
+    return lobe.reshape(reflections.shape[:-1])
+
+
+@pytest.mark.parametrize(("exponent", "batches"), [(20.0, 16), (200.0, 40)])
+def test_phong_lobe_of_a_small_bright_patch_matches_the_analytic_lobe(gl_ctx, exponent, batches):
+    img = bright_patch()
+    session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session, batches, kd=0.0, fresnel=1.0, phong_exponent=exponent, samples=64
+    )
+    r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
+    expected = analytic_patch_lobe(r, exponent)
+    est, se = method.estimate()[..., 0], method.standard_error()[..., 0]
+    lit = inside & (expected > 0.05 * expected[inside].max())
+    assert lit.sum() >= 8, "too few pixels see the patch"
+    ratio = est[lit] / expected[lit]
+    assert abs(ratio.mean() - 1) < 0.01, f"mean ratio {ratio.mean():.4f}"
+    assert np.all(np.abs(est[lit] - expected[lit]) < 4.5 * se[lit]), "outside the reported CI"
+    assert np.median(se[lit] / est[lit]) < 0.02
+    session.release()
+
+
+def smooth_environment(height=32):
+    d = latlong.texel_directions(height)
+    sky = np.stack([0.4 + 0.3 * d[..., 1], 0.5 + 0.2 * d[..., 0], 0.8 - 0.3 * d[..., 2]], -1)
+    sky += 4.0 * np.exp(-12.0 * np.sum((d - [0.5, 0.6, 0.62]) ** 2, -1))[..., None]
+    return np.maximum(sky, 0).astype(np.float32)
+
+
+def test_diffuse_and_glossy_match_brute_force_within_the_reported_confidence(gl_ctx):
+    img = smooth_environment()
+    session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session, 16, kd=0.8, fresnel=0.2, phong_exponent=30.0, samples=8
+    )
+    cos = np.sum(normal * view, -1)
+    F = schlick(0.2, cos)[..., None]
+    r = 2 * cos[..., None] * normal - view
+    diffuse = 0.8 * brute_force.irradiance(img, normal) / np.pi
+    glossy = brute_force.phong(img, r, 30.0)
+    expected = (1 - F) * diffuse + F * glossy
+    est, se = method.estimate()[inside], method.standard_error()[inside]
+    z = (est - expected[inside]) / se
+    assert np.mean(np.abs(z) < 4) > 0.99, f"|z| < 4 for only {np.mean(np.abs(z) < 4):.3f}"
+    assert 0.3 < np.mean(z**2) < 3.0, "the reported error is not the actual spread"
+    assert abs(np.mean(est / expected[inside]) - 1) < 0.005
+    session.release()
+
+
+def test_diffuse_part_matches_brute_force_irradiance_within_half_a_percent(gl_ctx):
+    img = smooth_environment()
+    session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+    # f_λ = 0 leaves F = (1 - n.v)^5: under 0.1 % of glossy where n.v > 0.75
+    method, inside, normal, view = converge(
+        session, 16, kd=1.0, fresnel=0.0, phong_exponent=1.0, samples=16
+    )
+    cos = np.sum(normal * view, -1)
+    F = schlick(0.0, cos)[..., None]
+    r = 2 * cos[..., None] * normal - view
+    expected = (1 - F) * brute_force.irradiance(img, normal) / np.pi + F * brute_force.phong(
+        img, r, 1.0
+    )
+    est, se = method.estimate()[inside], method.standard_error()[inside]
+    ratio = est / expected[inside]
+    assert abs(ratio.mean() - 1) < 0.005, f"mean ratio {ratio.mean():.4f}"
+    assert np.mean(np.abs(est - expected[inside]) < 4 * se) > 0.99
+    session.release()

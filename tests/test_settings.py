@@ -1,0 +1,147 @@
+"""Viewer settings: round trip, corrupt files replaced by defaults with a warning, atomic writes."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import pytest
+
+from envstudio.ui import settings as settings_module
+from envstudio.ui.settings import ViewerSettings, load_settings, save_settings, settings_path
+
+
+@pytest.fixture(autouse=True)
+def config_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Every test gets its own settings folder."""
+    folder = tmp_path / "config"
+    monkeypatch.setenv("ENVSTUDIO_CONFIG_DIR", str(folder))
+    return folder
+
+
+def custom_settings() -> ViewerSettings:
+    """Settings where every field differs from its default."""
+    return ViewerSettings(
+        method="kautz",
+        method_values={"mirror": {"fresnel": 0.25, "kd": 0.5}, "kautz": {"lod_bias": 2.5}},
+        display={"exposure": -1.5, "tonemap": "reinhard", "background": False},
+        scene="room",
+        environment="/data/maps/forest.exr",
+        mesh="/data/meshes/teapot.obj",
+        camera={"azimuth": 30.0, "elevation": -12.5, "distance": 4.0, "target": [0.1, 0.2, 0.3]},
+        object_rotation=[10.0, -20.0, 30.0],
+        turntable=True,
+        turntable_speed=-45.0,
+        window_size=[640, 480],
+        imgui_ini="[Window][Method]\nPos=8,8\nSize=290,200\n",
+    )
+
+
+def test_round_trip(config_dir):
+    original = custom_settings()
+    assert asdict(original) != asdict(ViewerSettings()), "the fixture must change every field"
+    for field, value in asdict(original).items():
+        assert value != getattr(ViewerSettings(), field), field
+
+    save_settings(original)
+    loaded, warning = load_settings()
+
+    assert warning is None
+    assert loaded == original
+    assert settings_path() == config_dir / "settings.json"
+    assert sorted(p.name for p in config_dir.iterdir()) == ["settings.json"]
+
+
+def test_missing_file_gives_defaults_silently(config_dir):
+    loaded, warning = load_settings()
+    assert (loaded, warning) == (ViewerSettings(), None)
+    assert not settings_path().exists()
+
+
+def test_unknown_keys_are_ignored(config_dir):
+    config_dir.mkdir(parents=True, exist_ok=True)
+    settings_path().write_text(json.dumps({"method": "mirror", "from_a_later_version": 1}))
+    loaded, warning = load_settings()
+    assert warning is None
+    assert loaded == ViewerSettings(method="mirror")
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        b"{not json",
+        b"",
+        b"\xff\xfe\x00garbage",
+        b"[1, 2, 3]",
+        b'{"method": 3}',
+        b'{"window_size": "large"}',
+        b'{"camera": [1, 2, 3]}',
+        b'{"turntable_speed": true}',
+        b'{"scene": 7}',
+    ],
+    ids=[
+        "syntax",
+        "empty",
+        "binary",
+        "not-an-object",
+        "method-number",
+        "size-string",
+        "camera-list",
+        "speed-bool",
+        "scene-number",
+    ],
+)
+def test_corrupt_file_gives_defaults_warning_and_backup(config_dir, content):
+    config_dir.mkdir(parents=True, exist_ok=True)
+    path = settings_path()
+    path.write_bytes(content)
+
+    loaded, warning = load_settings()
+
+    assert loaded == ViewerSettings()
+    assert warning is not None
+    assert len(warning.splitlines()) == 1, warning
+    assert str(path) in warning and "corrupt" in warning
+    backup = path.with_name("settings.json.corrupt")
+    assert backup.read_bytes() == content
+    assert not path.exists(), "the corrupt file must be moved aside"
+
+    # The next start is clean, and saving works again.
+    assert load_settings() == (ViewerSettings(), None)
+    save_settings(custom_settings())
+    assert load_settings() == (custom_settings(), None)
+
+
+def test_failure_before_writing_leaves_old_file(config_dir, monkeypatch):
+    save_settings(custom_settings())
+    before = settings_path().read_bytes()
+
+    def broken_dumps(*args, **kwargs):
+        raise RuntimeError("serialiser failed")
+
+    monkeypatch.setattr(settings_module.json, "dumps", broken_dumps)
+    with pytest.raises(RuntimeError, match="serialiser failed"):
+        save_settings(ViewerSettings())
+
+    assert settings_path().read_bytes() == before
+    assert sorted(p.name for p in config_dir.iterdir()) == ["settings.json"]
+
+
+def test_failure_while_writing_leaves_old_file_and_no_temporary(config_dir, monkeypatch):
+    save_settings(custom_settings())
+    before = settings_path().read_bytes()
+    real_write_text = Path.write_text
+
+    def write_half_then_fail(self, text, *args, **kwargs):
+        real_write_text(self, text[: len(text) // 2], *args, **kwargs)
+        raise OSError(28, "No space left on device")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(Path, "write_text", write_half_then_fail)
+        with pytest.raises(OSError, match="No space left"):
+            save_settings(ViewerSettings())
+
+    assert settings_path().read_bytes() == before
+    assert sorted(p.name for p in config_dir.iterdir()) == ["settings.json"]
+    assert load_settings() == (custom_settings(), None)
