@@ -26,7 +26,7 @@ def converge(session: RenderSession, batches: int, **params):
     return method, inside, normal, view
 
 
-def test_constant_environment_gives_kd_L_and_L(gl_ctx):
+def test_constant_environment_gives_kd_l_and_l(gl_ctx):
     colour = np.array([0.2, 0.5, 1.0])
     session = RenderSession(sphere_scene(Environment.constant(colour), rings=256), ctx=gl_ctx)
     method, inside, normal, view = converge(

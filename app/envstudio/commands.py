@@ -69,8 +69,13 @@ def render_until_finished(session: RenderSession, method: Method, size: tuple[in
     stats = session.render_offscreen(method, size)
     if method.finished():
         return stats
-    with tqdm(desc=method.name, unit="frame", file=sys.stderr, disable=not sys.stderr.isatty(),
-              bar_format="{desc}: {n} frames {elapsed} {postfix}") as bar:
+    with tqdm(
+        desc=method.name,
+        unit="frame",
+        file=sys.stderr,
+        disable=not sys.stderr.isatty(),
+        bar_format="{desc}: {n} frames {elapsed} {postfix}",
+    ) as bar:
         while not method.finished():
             stats = session.render_offscreen(method, size)
             bar.update(1)

@@ -83,8 +83,9 @@ def build_bvh(triangles: npt.ArrayLike, leaf_size: int = 4) -> FlatBVH:
     )
 
 
-def intersect(bvh: FlatBVH, triangles: npt.ArrayLike, origin: npt.ArrayLike,
-              direction: npt.ArrayLike) -> tuple[float, int]:
+def intersect(
+    bvh: FlatBVH, triangles: npt.ArrayLike, origin: npt.ArrayLike, direction: npt.ArrayLike
+) -> tuple[float, int]:
     """Closest hit of one ray (CPU twin of trace.glsl), by Möller–Trumbore.
 
     Returns

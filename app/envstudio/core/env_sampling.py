@@ -56,8 +56,9 @@ class EnvironmentDistribution:
     conditional_cdf: npt.NDArray[np.float64]
 
     @classmethod
-    def from_latlong(cls, image: npt.ArrayLike, max_height: int = 256,
-                     floor: float = 1e-3) -> EnvironmentDistribution:
+    def from_latlong(
+        cls, image: npt.ArrayLike, max_height: int = 256, floor: float = 1e-3
+    ) -> EnvironmentDistribution:
         """Build the tables from an (h, 2h, 3) lat-long radiance map."""
         img = np.asarray(image, dtype=np.float64)
         factor = 1
@@ -70,7 +71,8 @@ class EnvironmentDistribution:
         weights = (lum + floor * max(lum.mean(), 1e-12)) * sin_theta[:, None]
         row_sums = weights.sum(axis=1)
         conditional = np.concatenate(
-            [np.zeros((height, 1)), np.cumsum(weights, axis=1) / row_sums[:, None]], axis=1)
+            [np.zeros((height, 1)), np.cumsum(weights, axis=1) / row_sums[:, None]], axis=1
+        )
         marginal = np.concatenate([[0.0], np.cumsum(row_sums) / row_sums.sum()])
         conditional[:, -1] = 1.0
         marginal[-1] = 1.0

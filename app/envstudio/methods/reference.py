@@ -103,19 +103,57 @@ class ReferenceMethod(Method):
     title = "Reference (Monte Carlo)"
     summary = "Rendering equation per pixel by MIS importance sampling, accumulated to convergence."
     parameters = (
-        Parameter("model", "choice", "phong", choices=MODELS, rebuild=False,
-                  help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX."),
-        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."),
+        Parameter(
+            "model",
+            "choice",
+            "phong",
+            choices=MODELS,
+            rebuild=False,
+            help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX.",
+        ),
+        Parameter(
+            "fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."
+        ),
         Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo."),
-        Parameter("phong_exponent", "float", 200.0, 1.0, 10000.0, "N",
-                  "Phong exponent (microfacet: alpha = sqrt(2 / (4N + 2))).", log=True),
-        Parameter("trace", "bool", True, rebuild=True,
-                  help="Trace the scene's triangles: self-occlusion, local and self-reflections."),
-        Parameter("samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."),
-        Parameter("max_samples", "int", 8192, 1, 10_000_000, "spp",
-                  "Sample budget per pixel; beyond it the result is reported as not converged."),
-        Parameter("tolerance", "float", 0.001, 1e-5, 0.1, "",
-                  "Converged when the successive-half RMS change is below this.", log=True),
+        Parameter(
+            "phong_exponent",
+            "float",
+            200.0,
+            1.0,
+            10000.0,
+            "N",
+            "Phong exponent (microfacet: alpha = sqrt(2 / (4N + 2))).",
+            log=True,
+        ),
+        Parameter(
+            "trace",
+            "bool",
+            True,
+            rebuild=True,
+            help="Trace the scene's triangles: self-occlusion, local and self-reflections.",
+        ),
+        Parameter(
+            "samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."
+        ),
+        Parameter(
+            "max_samples",
+            "int",
+            8192,
+            1,
+            10_000_000,
+            "spp",
+            "Sample budget per pixel; beyond it the result is reported as not converged.",
+        ),
+        Parameter(
+            "tolerance",
+            "float",
+            0.001,
+            1e-5,
+            0.1,
+            "",
+            "Converged when the successive-half RMS change is below this.",
+            log=True,
+        ),
     )
 
     def __init__(self, ctx, programs):
@@ -176,8 +214,12 @@ class ReferenceMethod(Method):
             self._trace = TraceData(self.ctx, scene)
             self._trace_key = geometry
         key = (
-            frame.size, frame.view.tobytes(), frame.projection.tobytes(), self.values.revision,
-            scene.environment_revision, tuple(g.model.tobytes() for g in scene.reflectors()),
+            frame.size,
+            frame.view.tobytes(),
+            frame.projection.tobytes(),
+            self.values.revision,
+            scene.environment_revision,
+            tuple(g.model.tobytes() for g in scene.reflectors()),
         )
         if key != self._key:
             self._key = key

@@ -20,8 +20,9 @@ from envstudio.methods.context import GpuScene
 TEXTURE_WIDTH = 4096
 
 
-def scene_triangles(scene: GpuScene) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64],
-                                               npt.NDArray[np.float32]]:
+def scene_triangles(
+    scene: GpuScene,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float32]]:
     """World-space triangles of every node.
 
     Returns

@@ -40,8 +40,8 @@ def _kernel_sum(image, queries, kernel) -> npt.NDArray[np.float64]:
     flat = q.reshape(-1, 3)
     out = np.empty((len(flat), 3))
     for start in range(0, len(flat), _CHUNK):
-        cos = flat[start:start + _CHUNK] @ dirs.T
-        out[start:start + _CHUNK] = kernel(cos) @ weighted
+        cos = flat[start : start + _CHUNK] @ dirs.T
+        out[start : start + _CHUNK] = kernel(cos) @ weighted
     return out.reshape(*q.shape[:-1], 3)
 
 
@@ -50,8 +50,9 @@ def irradiance(image: npt.ArrayLike, normals: npt.ArrayLike) -> npt.NDArray[np.f
     return _kernel_sum(image, normals, lambda c: np.maximum(c, 0.0))
 
 
-def phong(image: npt.ArrayLike, reflections: npt.ArrayLike, exponent: float
-          ) -> npt.NDArray[np.float64]:
+def phong(
+    image: npt.ArrayLike, reflections: npt.ArrayLike, exponent: float
+) -> npt.NDArray[np.float64]:
     """Normalised Phong lobe of seed 000 eq. 7, L(r) = (N+1)/2π ∫ max(r·l, 0)^N L(l) dl.
 
     The normalisation (N + 1)/2π makes the lobe integrate to 1 over the
