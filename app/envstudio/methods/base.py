@@ -46,6 +46,9 @@ class Method(ABC):
         self.ctx = ctx
         self.programs = programs
         self.values = ParameterValues(self.parameters)
+        #: Work a progressive method may do per frame, in ms (None: a whole batch per
+        #: frame, as headless commands want; the window sets a budget to stay responsive).
+        self.frame_budget_ms: float | None = None
 
     @abstractmethod
     def render(self, frame: FrameInputs) -> None:

@@ -55,6 +55,7 @@ class GpuScene:
         self.scene = scene
         self.cube_size = cube_size
         self.environment_revision = 0
+        self.geometry_revision = 0
         self.latlong: moderngl.Texture | None = None
         self.cube: moderngl.TextureCube | None = None
         self.sh9 = np.zeros((9, 3), dtype=np.float32)
@@ -86,12 +87,14 @@ class GpuScene:
         self._release_nodes()
         self.nodes = uploaded
         self.scene.nodes = list(nodes)
+        self.geometry_revision += 1
 
     def refresh_transforms(self) -> None:
         """Recompute model matrices after a node's transform changed."""
         for gpu_node in self.nodes:
             gpu_node.model = gpu_node.node.transform.matrix()
             gpu_node.normal = normal_matrix(gpu_node.model)
+        self.geometry_revision += 1
 
     def reflectors(self) -> list[GpuNode]:
         """GPU nodes drawn by the method."""

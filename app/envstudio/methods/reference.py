@@ -18,6 +18,7 @@ radiance.glsl, resolve.glsl.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import moderngl
@@ -170,6 +171,8 @@ class ReferenceMethod(Method):
         self._depth_fbo: moderngl.Framebuffer | None = None
         self._key: tuple | None = None
         self._snapshot: npt.NDArray[np.float64] | None = None
+        self._band_start = 0
+        self._band_rows = 1
 
     def finished(self) -> bool:
         """Converged, or the sample budget is spent."""
@@ -190,10 +193,6 @@ class ReferenceMethod(Method):
         if not self.finished():
             with frame.timer.measure("reference.accumulate"):
                 self._accumulate(frame)
-            self.status.batches += 1
-            self.status.samples = self.status.batches * int(self.values["samples"])
-            if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
-                self._check_convergence()
         frame.target.use()
         with frame.timer.measure("reference.resolve"):
             program = self.programs.get("reference/resolve.glsl")
@@ -201,13 +200,49 @@ class ReferenceMethod(Method):
             set_uniform(program, "u_sum", 0)
             self._draw_reflectors(program, frame)
 
+    def _accumulate(self, frame: FrameInputs) -> None:
+        """Add samples: one whole batch, or bands of rows within :attr:`frame_budget_ms`.
+
+        In the window a batch over the whole image can take seconds on a
+        software renderer; the image is then processed in horizontal bands,
+        as many per frame as fit the budget, so the UI stays responsive. A
+        batch is complete when the bands have covered every row.
+        """
+        height = frame.size[1]
+        start = time.perf_counter()
+        while True:
+            if self._band_start == 0:
+                self._depth_prepass(frame)
+            rows = height if self.frame_budget_ms is None else min(self._band_rows, height)
+            rows = min(rows, height - self._band_start)
+            band_start = time.perf_counter()
+            self._accumulate_band(frame, self._band_start, rows)
+            if self.frame_budget_ms is not None:
+                self.ctx.finish()
+                per_row = (time.perf_counter() - band_start) / rows
+                self._band_rows = max(1, int(0.5 * self.frame_budget_ms / 1e3 / max(per_row, 1e-9)))
+            self._band_start += rows
+            if self._band_start >= height:
+                self._band_start = 0
+                self._finish_batch()
+                if self.frame_budget_ms is None or self.finished():
+                    return
+            if (time.perf_counter() - start) * 1e3 >= self.frame_budget_ms:
+                return
+
+    def _finish_batch(self) -> None:
+        self.status.batches += 1
+        self.status.samples = self.status.batches * int(self.values["samples"])
+        if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
+            self._check_convergence()
+
     def _prepare(self, scene: GpuScene, frame: FrameInputs) -> None:
         if self._tables_revision != scene.environment_revision:
             if self._tables is not None:
                 self._tables.release()
             self._tables = _EnvironmentTables(self.ctx, scene.scene.environment.radiance)
             self._tables_revision = scene.environment_revision
-        geometry = (id(scene), tuple((id(g.node), g.model.tobytes()) for g in scene.nodes))
+        geometry = (id(scene), scene.geometry_revision)
         if self.values["trace"] and geometry != self._trace_key:
             if self._trace is not None:
                 self._trace.release()
@@ -219,7 +254,7 @@ class ReferenceMethod(Method):
             frame.projection.tobytes(),
             self.values.revision,
             scene.environment_revision,
-            tuple(g.model.tobytes() for g in scene.reflectors()),
+            scene.geometry_revision,
         )
         if key != self._key:
             self._key = key
@@ -227,8 +262,16 @@ class ReferenceMethod(Method):
             self._fbo.clear(0.0, 0.0, 0.0, 0.0)
             self.status = ConvergenceStatus()
             self._snapshot = None
+            self._band_start = 0
 
-    def _accumulate(self, frame: FrameInputs) -> None:
+    def _depth_prepass(self, frame: FrameInputs) -> None:
+        """Nearest reflector depth per pixel: with additive blending only it may be shaded."""
+        self._depth_fbo.clear(depth=1.0)
+        self._depth_fbo.use()
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self._draw_reflectors(self.programs.get("reference/resolve.glsl"), frame)
+
+    def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
         program = self.programs.get("reference/accumulate.glsl", {"TRACE_LOCAL": int(trace)})
         scene = frame.scene
@@ -244,18 +287,14 @@ class ReferenceMethod(Method):
             set_uniform(program, f"u_{name}", float(self.values[name]))
         set_uniform(program, "u_samples", int(self.values["samples"]))
         set_uniform(program, "u_frame", self.status.batches)
-        # Depth pre-pass, then shade only the nearest surface (depth <=): with additive
-        # blending every fragment that passed a plain depth test would count.
-        self._depth_fbo.clear(depth=1.0)
-        self._depth_fbo.use()
-        self.ctx.enable(moderngl.DEPTH_TEST)
-        self._draw_reflectors(self.programs.get("reference/resolve.glsl"), frame)
         self._fbo.use()
+        self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
         self.ctx.depth_func = "<="
-        self.ctx.enable(moderngl.BLEND)
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         self.ctx.blend_equation = moderngl.FUNC_ADD
+        self.ctx.scissor = (0, first_row, frame.size[0], rows)
         self._draw_reflectors(program, frame)
+        self.ctx.scissor = None
         self.ctx.disable(moderngl.BLEND)
         self.ctx.blend_func = moderngl.DEFAULT_BLENDING
         self.ctx.depth_func = "<"

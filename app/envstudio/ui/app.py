@@ -72,6 +72,8 @@ from envstudio.ui.window import open_window
 TITLE = "envmap-studio"
 CYCLE_FRAMES = 2
 """Frames each method is shown with ``--cycle-methods``."""
+PROGRESSIVE_BUDGET_MS = 40.0
+"""Milliseconds of progressive accumulation (the reference) per frame, so the UI stays live."""
 MIN_WINDOW_SIZE = (320, 240)
 MAX_WINDOW_SIZE = (16384, 16384)
 
@@ -340,6 +342,7 @@ class Viewer(WindowConfig):
                 print(f"envstudio: warning: {problem}", file=sys.stderr)
             if problems:
                 self.status.error("\n".join(problems))
+            self.session.method(name).frame_budget_ms = PROGRESSIVE_BUDGET_MS
         return self.session.method(name)
 
     def _restore_method(self, name: str) -> list[str]:

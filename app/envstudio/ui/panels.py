@@ -119,6 +119,11 @@ def method_panel(
             imgui.set_item_tooltip("Defaults, then the scene material's kd, fresnel, exponent.")
         else:
             imgui.text_disabled("no parameters")
+        progress = method.status_line()
+        if progress:
+            imgui.separator()
+            colour = (0.4, 0.9, 0.4, 1.0) if method.finished() else (1.0, 0.8, 0.3, 1.0)
+            imgui.text_colored(colour, progress)
     _end()
     return picked
 
