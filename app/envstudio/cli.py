@@ -51,6 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     view.add_argument("--screenshot", help="save a screenshot (with the UI) before quitting")
     view.add_argument(
+        "--compare", metavar="METHOD", help="start in split screen against this method"
+    )
+    view.add_argument(
         "--cycle-methods",
         action="store_true",
         help="switch to the next method every few frames (smoke tests)",

@@ -65,6 +65,11 @@ class FrameRenderer:
         self._fbo: moderngl.Framebuffer | None = None
 
     @property
+    def hdr_texture(self) -> moderngl.Texture | None:
+        """The float colour target of the last frame (RGBA32F, linear radiance)."""
+        return self._hdr
+
+    @property
     def hdr_framebuffer(self) -> moderngl.Framebuffer | None:
         """The float target of the last frame (None before the first)."""
         return self._fbo

@@ -39,6 +39,7 @@ from envstudio.io.scene_file import shipped_scenes
 from envstudio.methods.base import Method, available_methods, method_class
 from envstudio.methods.parameters import ParameterValues
 from envstudio.render.session import RenderSession
+from envstudio.render.split_view import SplitView
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
@@ -50,6 +51,7 @@ from envstudio.ui.capture import (
     read_framebuffer,
     save,
 )
+from envstudio.ui.compare_panel import CompareState, compare_panel
 from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.imgui_input import ImGuiInput
 from envstudio.ui.imgui_renderer import ImGuiRenderer
@@ -108,6 +110,7 @@ class RunOptions:
     frames: int = 0
     screenshot: Path | None = None
     cycle_methods: bool = False
+    compare: str | None = None
 
 
 def run_viewer(args: argparse.Namespace) -> int:
@@ -137,6 +140,8 @@ def run_viewer(args: argparse.Namespace) -> int:
             raise ParameterError(f"--screenshot {screenshot}: expected a .png file name")
     if args.method:
         method_class(args.method)
+    if args.compare:
+        method_class(args.compare)
     settings, warning = load_settings()
     warnings = [warning] if warning else []
     start = _start_scene(args, settings, warnings)
@@ -151,7 +156,7 @@ def run_viewer(args: argparse.Namespace) -> int:
             start=start,
             settings=settings,
             method=args.method,
-            options=RunOptions(args.frames, screenshot, args.cycle_methods),
+            options=RunOptions(args.frames, screenshot, args.cycle_methods, args.compare),
             warnings=warnings,
         )
         try:
@@ -291,6 +296,8 @@ class Viewer(WindowConfig):
         saved_method = settings.method if settings.method in self.methods else None
         self.method_name = method or saved_method or next(iter(self.methods))
         self.camera_control = CameraControl(wnd.mouse.left, wnd.mouse.right)
+        self.compare = CompareState(other=options.compare)
+        self.split_view = SplitView(self.session.renderer)
         self.history = FrameHistory()
         self.capture = CaptureOptions(str(default_captures_dir()))
         self._capture_request: CaptureRequest | None = None
@@ -395,14 +402,25 @@ class Viewer(WindowConfig):
             return
         screen = self.ctx.screen
         try:
-            stats = self.session.renderer.render(
-                self.session.gpu_scene,
-                self.method(self.method_name),
-                self.session.camera,
-                size,
-                screen,
-                (0, 0, *size),
-            )
+            if self.compare.other:
+                stats, _ = self.split_view.render(
+                    self.session.gpu_scene,
+                    self.method(self.method_name),
+                    self.method(self.compare.other),
+                    self.session.camera,
+                    size,
+                    screen,
+                    self.compare.settings,
+                )
+            else:
+                stats = self.session.renderer.render(
+                    self.session.gpu_scene,
+                    self.method(self.method_name),
+                    self.session.camera,
+                    size,
+                    screen,
+                    (0, 0, *size),
+                )
         except UserError as exc:
             self._report_render_error(f"{self.method_name}: {exc}")
         else:
@@ -445,6 +463,7 @@ class Viewer(WindowConfig):
             self.control, self.session.renderer.display, self.dialogs, self.jobs, self.status
         )
         stats_panel(self.history, size)
+        compare_panel(self.methods, self.method_name, self.compare)
         if capture_panel(self.capture):
             self._request_capture(self.capture.fmt)
 
@@ -506,18 +525,20 @@ class Viewer(WindowConfig):
     def on_mouse_press_event(self, x: int, y: int, button: int) -> None:
         """A press starts a camera gesture unless it was over a panel."""
         self.gui_input.on_mouse_press_event(x, y, button)
-        self.camera_control.press(
-            button, self.wnd.modifiers.shift, self.gui_input.want_capture_mouse
-        )
+        over_panel = self.gui_input.want_capture_mouse
+        on_divider = not over_panel and self.compare.grab(x, self.wnd.size[0])
+        self.camera_control.press(button, self.wnd.modifiers.shift, over_panel or on_divider)
 
     def on_mouse_release_event(self, x: int, y: int, button: int) -> None:
         """A release ends the camera gesture."""
         self.gui_input.on_mouse_release_event(x, y, button)
         self.camera_control.release()
+        self.compare.dragging = False
 
     def on_mouse_drag_event(self, x: int, y: int, dx: int, dy: int) -> None:
         """Drags orbit or pan the camera (if the gesture started outside the panels)."""
         self.gui_input.on_mouse_drag_event(x, y, dx, dy)
+        self.compare.drag(x, self.wnd.size[0])
         self.camera_control.drag(self.session.camera, dx, dy, self.wnd.size[1])
 
     def on_mouse_scroll_event(self, x_offset: float, y_offset: float) -> None:
@@ -542,6 +563,7 @@ class Viewer(WindowConfig):
         self.dialogs.environment.close()
         self.dialogs.mesh.close()
         self.gui.release()
+        self.split_view.release()
         implot.destroy_context()
         imgui.destroy_context()
         self.session.release()

@@ -1,0 +1,85 @@
+"""The Compare panel: split screen against another method and the error heat map.
+
+The state lives in :class:`CompareState`; the panel edits it in place and the
+app renders through :class:`envstudio.render.split_view.SplitView` while a
+second method is chosen. The divider can be dragged in the 3D view.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from imgui_bundle import imgui
+
+from envstudio.core.colormap import magma
+from envstudio.methods.base import Method
+from envstudio.render.split_view import SplitSettings
+
+OFF = "off"
+"""Combo entry for no comparison."""
+GRAB_PIXELS = 6.0
+"""How close to the divider (window pixels) a press grabs it."""
+
+
+@dataclass
+class CompareState:
+    """What the compare view shows and whether the divider is being dragged."""
+
+    other: str | None = None
+    settings: SplitSettings = field(default_factory=SplitSettings)
+    dragging: bool = False
+
+    def grab(self, x: float, window_width: float) -> bool:
+        """Start dragging if a press at ``x`` is on the divider; returns whether it was."""
+        on_divider = abs(x - self.settings.divider * window_width) <= GRAB_PIXELS
+        self.dragging = bool(self.other and self.settings.split and on_divider)
+        return self.dragging
+
+    def drag(self, x: float, window_width: float) -> None:
+        """Move the divider to ``x`` while dragging."""
+        if self.dragging and window_width > 0:
+            self.settings.divider = min(max(x / window_width, 0.0), 1.0)
+
+
+def compare_panel(methods: dict[str, type[Method]], current: str, state: CompareState) -> None:
+    """Edit ``state``: the method compared against, split, divider, heat map and its scale."""
+    imgui.set_next_window_pos((310.0, 8.0), imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size((300.0, 0.0), imgui.Cond_.first_use_ever)
+    if imgui.begin("Compare")[0]:
+        names = [OFF, *(n for n in methods if n != current)]
+        chosen = state.other if state.other in names else OFF
+        imgui.set_next_item_width(-1.0)
+        changed, index = imgui.combo("##other", names.index(chosen), names)
+        if changed:
+            state.other = None if names[index] == OFF else names[index]
+        imgui.set_item_tooltip("Method B, shown right of the divider and used by the heat map.")
+        if state.other:
+            settings = state.settings
+            settings.split = imgui.checkbox("split screen", settings.split)[1]
+            changed, value = imgui.slider_float("divider", settings.divider, 0.0, 1.0)
+            if changed:
+                settings.divider = value
+            settings.heat = imgui.checkbox("error heat map (A vs B)", settings.heat)[1]
+            changed, value = imgui.slider_float(
+                "scale", settings.heat_scale, 0.01, 2.0, "%.2f", imgui.SliderFlags_.logarithmic
+            )
+            if changed:
+                settings.heat_scale = value
+            if settings.heat:
+                _colour_bar(settings.heat_scale)
+    imgui.end()
+
+
+def _colour_bar(scale: float, steps: int = 32) -> None:
+    """The heat map's colour scale, 0 to ``scale`` relative error, drawn with the draw list."""
+    draw = imgui.get_window_draw_list()
+    x, y = imgui.get_cursor_screen_pos()
+    width = imgui.get_content_region_avail().x
+    height = 14.0
+    for i in range(steps):
+        r, g, b = magma((i + 0.5) / steps)
+        colour = imgui.get_color_u32((float(r), float(g), float(b), 1.0))
+        x0 = x + width * i / steps
+        draw.add_rect_filled((x0, y), (x0 + width / steps + 1.0, y + height), colour)
+    imgui.dummy((width, height))
+    imgui.text(f"0 %{'':>28}{100 * scale:.0f} % relative error")
