@@ -1,6 +1,7 @@
 #version 330 core
 // Method `reference`, accumulation pass: each frame adds one batch of
-// u_samples multiple-importance-sampled estimates (balance heuristic, Veach
+// u_samples multiple-importance-sampled estimates (stratified within the batch
+// by randomised QMC, common/random.glsl) (balance heuristic, Veach
 // 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel.
 //
 // Model 0 (seed 000 eq. 8): L_o = (1 - F) k_d D + F P with Schlick F(n.v)
@@ -43,20 +44,20 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     vec3 diffuse = vec3(0.0);
     vec3 glossy = vec3(0.0);
     // cosine-lobe sample (pdf = f)
-    vec3 l = sample_cosine(n, random2(pixel, uint(u_frame), 4u * index));
+    vec3 l = sample_cosine(n, stratified2(pixel, uint(u_frame), 0u, index));
     float pdf_f = max(dot(n, l), 0.0) / PI;
     if (pdf_f > 0.0) diffuse += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
     // environment sample for D
-    l = sample_environment(random2(pixel, uint(u_frame), 4u * index + 1u));
+    l = sample_environment(stratified2(pixel, uint(u_frame), 1u, index));
     float pdf_e = env_pdf(l);
     float f = max(dot(n, l), 0.0) / PI;
     if (f > 0.0) diffuse += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
     // Phong-lobe sample (pdf = lobe)
-    l = sample_phong(r, N, random2(pixel, uint(u_frame), 4u * index + 2u));
+    l = sample_phong(r, N, stratified2(pixel, uint(u_frame), 2u, index));
     pdf_f = phong_lobe(r, l, N);
     if (pdf_f > 0.0) glossy += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
     // environment sample for P
-    l = sample_environment(random2(pixel, uint(u_frame), 4u * index + 3u));
+    l = sample_environment(stratified2(pixel, uint(u_frame), 3u, index));
     pdf_e = env_pdf(l);
     f = phong_lobe(r, l, N);
     if (f > 0.0) glossy += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
@@ -70,7 +71,7 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     float F_view = schlick_fresnel(u_fresnel, n_dot_v);
     vec3 result = vec3(0.0);
     for (int technique = 0; technique < 2; ++technique) {
-        vec2 xi = random2(pixel, uint(u_frame), 4u * index + uint(technique));
+        vec2 xi = stratified2(pixel, uint(u_frame), 4u + uint(technique), index);
         vec3 l;
         if (technique == 0) {
             vec3 h = sample_ggx_half(n, alpha, xi);
