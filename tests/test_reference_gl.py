@@ -131,3 +131,18 @@ def test_diffuse_part_matches_brute_force_irradiance_within_half_a_percent(gl_ct
     assert abs(ratio.mean() - 1) < 0.005, f"mean ratio {ratio.mean():.4f}"
     assert np.mean(np.abs(est - expected[inside]) < 4 * se) > 0.99
     session.release()
+
+
+def test_microfacet_model_matches_brute_force_within_the_reported_confidence(gl_ctx):
+    # a lobe several texels wide, so the texel-centre sum is an accurate quadrature
+    img = smooth_environment(48)
+    session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session, 16, model="microfacet", kd=0.3, fresnel=0.5, phong_exponent=4.0, samples=16
+    )
+    alpha = np.sqrt(2.0 / (4 * 4.0 + 2.0))
+    expected = brute_force.microfacet(img, normal[inside], view[inside], alpha, 0.5, 0.3)
+    est, se = method.estimate()[inside], method.standard_error()[inside]
+    assert abs(np.mean(est / expected) - 1) < 0.01, np.mean(est / expected)
+    assert np.mean(np.abs(est - expected) < 4 * se) > 0.98
+    session.release()

@@ -60,3 +60,59 @@ def phong(
     """
     scale = (exponent + 1.0) / (2.0 * np.pi)
     return _kernel_sum(image, reflections, lambda c: scale * np.maximum(c, 0.0) ** exponent)
+
+
+def microfacet(
+    image: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    alpha: float,
+    f0: float,
+    kd: float,
+) -> npt.NDArray[np.float64]:
+    """Exitant radiance of the reference's microfacet model, summed over every texel.
+
+    f = k_d/π (1 − F(n·v)) + D G2 F(v·h) / (4 (n·l)(n·v)), with GGX D, the
+    height-correlated Smith G2 and Schlick F of ``f0`` (shaders/reference/
+    sampling.glsl, accumulate.glsl), integrated against L(l) (n·l) over n·l > 0.
+
+    Parameters
+    ----------
+    image
+        (h, 2h, 3) lat-long radiance.
+    normals, views
+        (..., 3) unit normals and unit directions towards the eye.
+    alpha
+        GGX roughness.
+    f0, kd
+        Schlick reflectance at normal incidence and diffuse albedo.
+
+    Returns
+    -------
+    (..., 3) float64
+        Radiance towards ``views``.
+    """
+    dirs, weighted = _texels(image)
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    v = np.asarray(views, dtype=np.float64).reshape(-1, 3)
+    out = np.empty((len(n), 3))
+    a2 = alpha * alpha
+    for start in range(0, len(n), _CHUNK // 4):
+        nc, vc = n[start : start + _CHUNK // 4], v[start : start + _CHUNK // 4]
+        n_dot_l = nc @ dirs.T
+        n_dot_v = np.maximum(np.sum(nc * vc, -1, keepdims=True), 1e-4)
+        h = vc[:, None, :] + dirs[None, :, :]
+        h /= np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-12)
+        n_dot_h = np.maximum(np.einsum("qk,qtk->qt", nc, h), 0.0)
+        v_dot_h = np.maximum(np.einsum("qk,qtk->qt", vc, h), 1e-4)
+        d = a2 / (np.pi * (n_dot_h**2 * (a2 - 1.0) + 1.0) ** 2)
+        lit = np.maximum(n_dot_l, 0.0)
+        g_l = n_dot_v * np.sqrt(lit**2 * (1.0 - a2) + a2)
+        g_v = lit * np.sqrt(n_dot_v**2 * (1.0 - a2) + a2)
+        g2 = 2.0 * lit * n_dot_v / np.maximum(g_l + g_v, 1e-9)
+        fresnel = f0 + (1.0 - f0) * (1.0 - v_dot_h) ** 5
+        specular = d * g2 * fresnel / (4.0 * np.maximum(lit, 1e-9) * n_dot_v)
+        diffuse = kd / np.pi * (1.0 - (f0 + (1.0 - f0) * (1.0 - n_dot_v) ** 5))
+        f = np.where(n_dot_l > 0.0, (specular + diffuse) * lit, 0.0)
+        out[start : start + _CHUNK // 4] = f @ weighted
+    return out.reshape(*np.shape(normals)[:-1], 3)
