@@ -67,6 +67,18 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default 512x512)")
     render.add_argument("-o", "--output", required=True, help="OUT.png (as displayed) or OUT.exr")
 
+    envmap = sub.add_parser("envmap", help="convert an environment (GPU) and save it as EXR")
+    envmap.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    envmap.add_argument(
+        "--to",
+        required=True,
+        choices=("latlong", "cube", "paraboloid", "spheremap"),
+        help="representation (cube: horizontal cross; paraboloid: front | back)",
+    )
+    envmap.add_argument("--size", type=int, default=256, help="face / output edge in texels")
+    envmap.add_argument("--border", type=int, default=0, help="paraboloid border in texels")
+    envmap.add_argument("-o", "--output", required=True, help="OUT.exr")
+
     methods = sub.add_parser("methods", help="list the methods and their parameters")
     methods.add_argument("--json", action="store_true", help="machine-readable output")
 
@@ -84,6 +96,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
+
+    fit = sub.add_parser(
+        "fit-glossiness",
+        help="refit the LOD bias <-> Phong exponent match (minutes; CPU only)",
+    )
+    fit.add_argument("--out", help="JSON file to write (default: the package's stored fit)")
+    fit.add_argument(
+        "--sizes", type=int, nargs="+", help="cube face sizes, powers of two (default 64..512)"
+    )
+    fit.add_argument("--environments", nargs="+", metavar="NAME", help="shipped maps to fit")
+    fit.add_argument("--directions", type=int, help="reflection directions per environment")
     return parser
 
 
@@ -96,7 +119,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args = build_parser().parse_args(["view", *(argv or sys.argv[1:])])
         from envstudio import commands
 
-        return getattr(commands, f"run_{command}")(args) or 0
+        return getattr(commands, f"run_{command.replace('-', '_')}")(args) or 0
     except UserError as exc:
         print(f"envstudio: error: {exc}", file=sys.stderr)
         return exc.exit_code

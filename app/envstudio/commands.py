@@ -85,6 +85,34 @@ def render_until_finished(session: RenderSession, method: Method, size: tuple[in
     return stats
 
 
+def run_envmap(args: argparse.Namespace) -> int:
+    """``envstudio envmap``: the environment in another representation, as linear EXR."""
+    from envstudio.envmap.conversions import upload_latlong
+    from envstudio.envmap.export import export_environment
+    from envstudio.gpu.context import create_headless_context
+    from envstudio.gpu.programs import ProgramLibrary
+    from envstudio.io.images import read_environment
+
+    output = check_output_path(args.output)
+    if output.suffix.lower() != ".exr":
+        raise ParameterError(f"-o {output}: expected an .exr file name")
+    if not 1 <= args.size <= 8192 or not 0 <= args.border < args.size // 2:
+        raise ParameterError(
+            f"--size {args.size} --border {args.border}: expected 1..8192 and 0 <= border < size/2"
+        )
+    radiance = read_environment(args.env)
+    ctx = create_headless_context()
+    programs = ProgramLibrary(ctx)
+    try:
+        latlong = upload_latlong(ctx, radiance)
+        path = export_environment(ctx, programs, latlong, args.to, args.size, args.border, output)
+    finally:
+        programs.release()
+        ctx.release()
+    print(f"{path}: {args.to} from {args.env}")
+    return 0
+
+
 def run_methods(args: argparse.Namespace) -> int:
     """``envstudio methods``: every method with its declared parameters."""
     described = [cls.describe() for cls in available_methods().values()]
