@@ -97,6 +97,27 @@ def build_parser() -> argparse.ArgumentParser:
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
 
+    compare = sub.add_parser(
+        "compare", help="measure methods against the converged reference (PSNR, SSIM, FLIP)"
+    )
+    _add_scene_options(compare)
+    compare.add_argument("--methods", required=True, help="comma-separated method names")
+    compare.add_argument("--camera", help="AZIMUTH,ELEVATION,DISTANCE in degrees and scene units")
+    compare.add_argument("--size", default="256x256", help="WIDTHxHEIGHT (default 256x256)")
+    compare.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="parameter for every method that declares it, the reference's included "
+        "(repeatable), e.g. phong_exponent=50 or max_samples=1024",
+    )
+    compare.add_argument("--frames", type=int, default=20, help="timed frames per method")
+    compare.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
+    compare.add_argument(
+        "--out", required=True, help="folder for the images, table and index.html"
+    )
+
     fit = sub.add_parser(
         "fit-glossiness",
         help="refit the LOD bias <-> Phong exponent match (minutes; CPU only)",

@@ -176,6 +176,84 @@ def run_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_fit_glossiness(args: argparse.Namespace) -> int:
+    """``envstudio fit-glossiness``: refit the LOD bias ↔ Phong exponent match (seed 000 §6)."""
+    from envstudio.io.images import read_environment
+    from envstudio.io.scene_file import shipped_environments
+    from envstudio.prefilter import glossiness
+
+    out = check_output_path(args.out) if args.out else glossiness.DATA_FILE
+    sizes = args.sizes or glossiness.DEFAULT_SIZES
+    if any(n < 4 or n & (n - 1) for n in sizes):
+        raise ParameterError(f"--sizes {' '.join(map(str, sizes))}: expected powers of two >= 4")
+    directions = glossiness.DEFAULT_DIRECTIONS if args.directions is None else args.directions
+    if directions < 16:
+        raise ParameterError(f"--directions {directions}: expected at least 16")
+    shipped = shipped_environments()
+    names = args.environments or glossiness.FIT_ENVIRONMENTS
+    unknown = [name for name in names if name not in shipped]
+    if unknown:
+        raise ParameterError(
+            f"--environments {' '.join(unknown)}: not shipped (shipped: {', '.join(shipped)})"
+        )
+    environments = {name: read_environment(shipped[name]) for name in names}
+    with tqdm(
+        desc="fit-glossiness", unit="step", file=sys.stderr, disable=not sys.stderr.isatty()
+    ) as bar:
+
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        fit = glossiness.fit_glossiness(
+            environments, sizes, directions=directions, progress=progress
+        )
+    write_text_atomic(out, json.dumps(fit, indent=1) + "\n")
+    model = fit["model"]
+    a, c, d = (model["coefficients"][k] for k in "acd")
+    print(
+        f"{out}: b = W({a:.4f} + {c:.4f} log2(n) {d:+.4f} log2(N)), residual rms "
+        f"{model['residual_rms']:.3f} levels over {model['points_used']} points"
+    )
+    return 0
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    """``envstudio compare``: methods against the converged reference, files and a table."""
+    from envstudio.core.metrics import MIN_SIZE
+    from envstudio.render.compare import method_classes, plan_parameters, run_comparison
+    from envstudio.render.report import format_table, write_report
+
+    size = parse_size(args.size)
+    if min(size) < MIN_SIZE:
+        raise ParameterError(f"--size {args.size}: compare needs at least {MIN_SIZE}x{MIN_SIZE}")
+    names = [name.strip() for name in args.methods.split(",") if name.strip()]
+    if not names:
+        raise ParameterError(f"--methods {args.methods!r}: expected comma-separated method names")
+    plan = plan_parameters(method_classes(names), args.param)
+    if args.frames < 1 or args.warmup < 0:
+        raise ParameterError("--frames must be >= 1 and --warmup >= 0")
+    out = check_output_path(args.out)
+    camera = parse_camera(args.camera) if args.camera else None
+    session = RenderSession(_scene(args))
+    try:
+        if camera:
+            session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+        comparison = run_comparison(
+            session, names, size, plan, args.frames, args.warmup, progress=sys.stderr.isatty()
+        )
+    finally:
+        session.release()
+    write_report(comparison, out)
+    print(format_table(comparison))
+    if not comparison.reliable:
+        print(
+            f"envstudio: warning: metrics unreliable: {comparison.reference.unreliable_reason}",
+            file=sys.stderr,
+        )
+    return 0
+
+
 def run_view(args: argparse.Namespace) -> int:
     """``envstudio view``: the desktop viewer."""
     from envstudio.ui.app import run_viewer

@@ -18,9 +18,9 @@ that is what the GPU path samples, because moderngl enables
 glossiness fit (prefilter.glossiness) must describe what is rendered. The
 mip *generation* is still per face, so at high levels the six face means show
 through as the coloured blocks of seed 000 Figure 4; seamless filtering only
-blends them across the edges. (2003 hardware also clamped the bilinear
-footprint at each face edge; that changes a lookup within half a texel of an
-edge, not the blur of the level.)
+blends them across the edges. (2003 hardware clamped the bilinear footprint
+at each face edge instead, which changes only the lookups within half a texel
+of that level from an edge.)
 
 Face arrays follow core.cubemap: (6, n, n, c), OpenGL face order, rows ↔ t.
 """
