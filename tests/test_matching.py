@@ -1,0 +1,59 @@
+"""Matched parameters: b <-> N through the fitted glossiness mapping, material copied."""
+
+import pytest
+
+from envstudio.methods.base import Method
+from envstudio.methods.parameters import Parameter
+from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
+from envstudio.render.matching import match_glossiness
+
+
+class _Bias(Method):
+    name, title, summary = "bias", "b", "lod-bias method"
+    parameters = (
+        Parameter("lod_bias", "float", 0.0, 0.0, 10.0),
+        Parameter("fresnel", "float", 0.5, 0.0, 1.0),
+    )
+
+    def render(self, frame):
+        raise NotImplementedError
+
+
+class _Phong(Method):
+    name, title, summary = "phong", "N", "exponent method"
+    parameters = (
+        Parameter("phong_exponent", "float", 100.0, 1.0, 10000.0),
+        Parameter("fresnel", "float", 0.5, 0.0, 1.0),
+        Parameter("kd", "float", 0.0, 0.0, 1.0),
+    )
+
+    def render(self, frame):
+        raise NotImplementedError
+
+
+def test_exponent_to_bias_and_back():
+    bias, phong = _Bias(None, None), _Phong(None, None)
+    phong.values.update({"phong_exponent": 225.0, "fresnel": 0.2})
+    line = match_glossiness(bias, phong, 64)
+    assert bias.values["lod_bias"] == pytest.approx(float(lod_bias_for_exponent(225.0, 64)))
+    assert bias.values["fresnel"] == 0.2
+    assert "N = 225" in line and "64²" in line
+    phong.values["phong_exponent"] = 1.0
+    match_glossiness(phong, bias, 64)
+    assert phong.values["phong_exponent"] == pytest.approx(225.0, rel=1e-6)
+    assert float(exponent_for_lod_bias(bias.values["lod_bias"], 64)) == pytest.approx(225.0)
+
+
+def test_out_of_range_bias_is_clamped_and_said():
+    bias, phong = _Bias(None, None), _Phong(None, None)
+    phong.values["phong_exponent"] = 10000.0  # sharper than level 0 of a 4x4 cube: b < 0
+    line = match_glossiness(bias, phong, 4)
+    assert bias.values["lod_bias"] == 0.0
+    assert "clamped" in line
+
+
+def test_same_kind_copies_values():
+    a, b = _Phong(None, None), _Phong(None, None)
+    a.values.update({"phong_exponent": 42.0, "kd": 0.3})
+    assert match_glossiness(b, a, 256) is None
+    assert b.values["phong_exponent"] == 42.0 and b.values["kd"] == 0.3
