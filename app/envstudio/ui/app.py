@@ -38,6 +38,7 @@ from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
 from envstudio.io.scene_file import shipped_scenes
 from envstudio.methods.base import Method, available_methods, method_class
 from envstudio.methods.parameters import ParameterValues
+from envstudio.render.matching import match_glossiness
 from envstudio.render.session import RenderSession
 from envstudio.render.split_view import SplitView
 from envstudio.scene.camera import OrbitCamera
@@ -360,8 +361,13 @@ class Viewer(WindowConfig):
         return [f"settings: {name}: {problem}" for problem in problems]
 
     def select_method(self, name: str) -> None:
-        """Show method ``name``."""
-        self.method(name)
+        """Show method ``name`` (with the look of the previous one when matching is on)."""
+        previous = self.method(self.method_name)
+        chosen = self.method(name)
+        if self.compare.match and chosen is not previous:
+            self.compare.match_note = match_glossiness(
+                chosen, previous, self.session.gpu_scene.cube_size
+            )
         self.method_name = name
 
     def _cycle(self) -> None:
@@ -403,6 +409,12 @@ class Viewer(WindowConfig):
         screen = self.ctx.screen
         try:
             if self.compare.other:
+                if self.compare.match:
+                    self.compare.match_note = match_glossiness(
+                        self.method(self.compare.other),
+                        self.method(self.method_name),
+                        self.session.gpu_scene.cube_size,
+                    )
                 stats, _ = self.split_view.render(
                     self.session.gpu_scene,
                     self.method(self.method_name),

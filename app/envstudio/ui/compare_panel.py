@@ -28,6 +28,8 @@ class CompareState:
     other: str | None = None
     settings: SplitSettings = field(default_factory=SplitSettings)
     dragging: bool = False
+    match: bool = True
+    match_note: str | None = None
 
     def grab(self, x: float, window_width: float) -> bool:
         """Start dragging if a press at ``x`` is on the divider; returns whether it was."""
@@ -53,6 +55,13 @@ def compare_panel(methods: dict[str, type[Method]], current: str, state: Compare
         if changed:
             state.other = None if names[index] == OFF else names[index]
         imgui.set_item_tooltip("Method B, shown right of the divider and used by the heat map.")
+        state.match = imgui.checkbox("match glossiness", state.match)[1]
+        imgui.set_item_tooltip(
+            "Keep f_λ, k_d and the look of the blur when switching methods and for B:\n"
+            "LOD bias b <-> Phong exponent N by the fitted mapping (prefilter/glossiness.py)."
+        )
+        if state.match and state.match_note:
+            imgui.text_wrapped(state.match_note)
         if state.other:
             settings = state.settings
             settings.split = imgui.checkbox("split screen", settings.split)[1]
