@@ -1,0 +1,456 @@
+"""``envstudio compare``: methods against the converged reference at matched parameters.
+
+Steps, in one :class:`RenderSession` (one camera, one size, one display setting):
+
+1. The reference (methods/reference.py) accumulates until it converges or spends
+   its sample budget (``max_samples``), with a progress bar. Its coverage is the
+   reflector mask; an empty mask (the camera sees no reflector) is an error.
+2. Each method renders the same frame (until :meth:`Method.finished`); its
+   linear HDR frame and its display image are kept and measured against the
+   reference's with core/metrics.py (PSNR, SSIM, FLIP on the display images
+   over the mask).
+3. Each method is timed by the bench code path (render/bench.py: wall clock
+   with ``ctx.finish()`` at both ends, median of ``frames`` frames after
+   ``warmup``); the reference's time per frame is the median of its own
+   accumulation frames, measured the same way.
+
+Parameter matching
+    Every method starts from the scene's material (RenderSession). ``--param
+    name=value`` goes to every method of the comparison that declares ``name``,
+    the reference included, and to the display settings; the others ignore it.
+    A name that no method and no display setting declares is an error. A method
+    that blurs a mip chain by a LOD bias (declares ``lod_bias`` but not
+    ``phong_exponent``) gets the b that looks like the reference's Phong
+    exponent N on this session's cube (prefilter/glossiness.py), unless
+    ``--param lod_bias=…`` sets it.
+
+Reliability
+    A reference that stopped on its sample budget without converging still
+    carries visible Monte Carlo noise, and that noise is part of every metric:
+    the comparison then marks every metric unreliable and says why
+    (:attr:`ReferenceRun.unreliable_reason`).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import numpy.typing as npt
+from tqdm import tqdm
+
+from envstudio.core.env_sampling import LUMINANCE
+from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
+from envstudio.errors import ParameterError
+from envstudio.gpu.context import describe
+from envstudio.methods.base import Method, method_class
+from envstudio.methods.parameters import parse_assignments
+from envstudio.methods.reference import ConvergenceStatus, ReferenceMethod
+from envstudio.prefilter.glossiness import lod_bias_for_exponent
+from envstudio.render.bench import run_bench
+from envstudio.render.display import DISPLAY_PARAMETERS
+from envstudio.render.session import RenderSession
+
+MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
+"""Parameters listed as "matched" in the report when a method declares them."""
+
+
+@dataclass(frozen=True)
+class ParameterPlan:
+    """Validated ``--param`` values, per method and for the display.
+
+    Attributes
+    ----------
+    methods : dict
+        Method name → {parameter name → value} for the names that method declares.
+    display : dict
+        Display setting → value.
+    """
+
+    methods: dict[str, dict[str, object]]
+    display: dict[str, object]
+
+
+@dataclass
+class ReferenceRun:
+    """The converged (or budget-limited) reference.
+
+    Attributes
+    ----------
+    parameters : dict
+        Its parameter values.
+    status : ConvergenceStatus
+        Samples per pixel, last successive-half change, converged.
+    frames_ms : list of float
+        Wall time of each accumulation frame, ms.
+    total_s : float
+        Wall time from the first frame to the last, s.
+    relative_standard_error : float
+        Median over the mask of the luminance standard error over the luminance
+        of the estimate (channel errors added: an upper bound).
+    hdr : (h, w, 3) float32
+        Linear radiance of the frame.
+    display : (h, w, 3) float32
+        The frame as displayed, in [0, 1].
+    """
+
+    parameters: dict[str, object]
+    status: ConvergenceStatus
+    frames_ms: list[float]
+    total_s: float
+    relative_standard_error: float
+    hdr: npt.NDArray[np.float32]
+    display: npt.NDArray[np.float32]
+
+    @property
+    def converged(self) -> bool:
+        """The successive-half change fell below the tolerance within the budget."""
+        return self.status.converged
+
+    @property
+    def unreliable_reason(self) -> str | None:
+        """Why the metrics cannot be trusted, or None when the reference converged."""
+        if self.converged:
+            return None
+        change = self.status.rms_change
+        measured = (
+            "no convergence check yet (fewer than 2 frames)"
+            if change is None
+            else f"half-change {100 * change:.3g} % > tolerance "
+            f"{100 * float(self.parameters['tolerance']):.3g} %"
+        )
+        return (
+            f"the reference did not converge within max_samples="
+            f"{self.parameters['max_samples']} spp ({measured}); its Monte Carlo noise is "
+            "part of every metric (raise max_samples or tolerance)"
+        )
+
+
+@dataclass
+class MethodResult:
+    """One method's frame and how it compares.
+
+    Attributes
+    ----------
+    name : str
+        Method name.
+    parameters : dict
+        Its parameter values as rendered.
+    matched : dict
+        The material parameters it declares (:data:`MATCHED_NAMES`) and their values.
+    glossiness : str or None
+        How ``lod_bias`` was matched to the reference's N, when it was.
+    metrics : ImageMetrics
+        Against the reference, over the mask.
+    relative_error : (h, w) float32
+        Per-pixel relative luminance error of the linear frames.
+    frame_ms : dict
+        ``median_ms`` and ``p95_ms`` of the time per frame.
+    timing : str
+        How ``frame_ms`` was measured.
+    hdr : (h, w, 3) float32
+        Linear radiance of the frame.
+    display : (h, w, 3) float32
+        The frame as displayed, in [0, 1].
+    """
+
+    name: str
+    parameters: dict[str, object]
+    matched: dict[str, object]
+    glossiness: str | None
+    metrics: ImageMetrics
+    relative_error: npt.NDArray[np.float32]
+    frame_ms: dict[str, float]
+    timing: str
+    hdr: npt.NDArray[np.float32]
+    display: npt.NDArray[np.float32]
+
+
+@dataclass
+class Comparison:
+    """Everything ``envstudio compare`` reports.
+
+    Attributes
+    ----------
+    scene : str
+        Scene name.
+    size : (int, int)
+        Width, height in pixels.
+    camera : (float, float, float)
+        Azimuth, elevation (degrees), distance (scene units).
+    display : dict
+        Display settings the display images were made with.
+    device : str
+        GL renderer and version.
+    mask : (h, w) bool
+        The reflector pixels (the reference's coverage).
+    reference : ReferenceRun
+    results : list of MethodResult
+        In the order asked for.
+    """
+
+    scene: str
+    size: tuple[int, int]
+    camera: tuple[float, float, float]
+    display: dict[str, object]
+    device: str
+    mask: npt.NDArray[np.bool_]
+    reference: ReferenceRun
+    results: list[MethodResult]
+
+    @property
+    def reliable(self) -> bool:
+        """Whether the metrics can be trusted (the reference converged)."""
+        return self.reference.converged
+
+
+def method_classes(names: Sequence[str]) -> list[type[Method]]:
+    """The reference's class and those of ``names`` (registered), each once, reference first.
+
+    Raises
+    ------
+    ParameterError
+        If a name is not a registered method.
+    """
+    classes: dict[str, type[Method]] = {ReferenceMethod.name: ReferenceMethod}
+    for name in names:
+        classes.setdefault(name, method_class(name))
+    return list(classes.values())
+
+
+def plan_parameters(classes: Sequence[type[Method]], assignments: Sequence[str]) -> ParameterPlan:
+    """Validate ``--param name=value`` strings for a comparison of ``classes``.
+
+    Parameters
+    ----------
+    classes
+        The method classes compared, the reference's included.
+    assignments
+        ``name=value`` strings.
+
+    Raises
+    ------
+    ParameterError
+        A malformed assignment, a value out of range, or a name that neither a
+        method of ``classes`` nor the display declares.
+    """
+    display_decl = {p.name: p for p in DISPLAY_PARAMETERS}
+    plan = ParameterPlan({cls.name: {} for cls in classes}, {})
+    for name, value in parse_assignments(assignments).items():
+        if name in display_decl:
+            plan.display[name] = display_decl[name].validate(value)
+            continue
+        takers = [(cls, p) for cls in classes for p in cls.parameters if p.name == name]
+        if not takers:
+            raise ParameterError(
+                f"--param {name}: no method of this comparison declares it "
+                f"({', '.join(cls.name for cls in classes)}; "
+                f"display: {', '.join(display_decl)})"
+            )
+        for cls, declared in takers:
+            plan.methods[cls.name][name] = declared.validate(value)
+    return plan
+
+
+def match_glossiness(method: Method, exponent: float, cube_size: int) -> str | None:
+    """Give a LOD-bias method the b that looks like Phong exponent N (prefilter/glossiness.py).
+
+    Applies to methods that declare ``lod_bias`` but not ``phong_exponent``;
+    b is clamped to the declared range.
+
+    Parameters
+    ----------
+    method
+        The method; its ``lod_bias`` value is set.
+    exponent
+        The reference's Phong exponent N.
+    cube_size
+        Face edge n of the cube map the method reads, texels.
+
+    Returns
+    -------
+    str or None
+        One line saying which b was used and why, or None when the method has no such bias.
+    """
+    if "lod_bias" not in method.values or "phong_exponent" in method.values:
+        return None
+    declared = next(p for p in method.values if p.name == "lod_bias")
+    fitted = float(lod_bias_for_exponent(exponent, cube_size))
+    b = float(np.clip(fitted, declared.minimum, declared.maximum))
+    method.values["lod_bias"] = b
+    clamped = "" if b == fitted else f" (fit {fitted:.3f}, clamped to the declared range)"
+    return f"b = {b:.3f} matched to N = {exponent:g} on a {cube_size}² cube{clamped}"
+
+
+def run_comparison(
+    session: RenderSession,
+    names: Sequence[str],
+    size: tuple[int, int],
+    plan: ParameterPlan,
+    frames: int = 20,
+    warmup: int = 3,
+    progress: bool = False,
+) -> Comparison:
+    """Render the reference and ``names`` at the session's camera and compare them.
+
+    Parameters
+    ----------
+    session
+        The session, camera already placed; its methods get ``plan``'s values.
+    names
+        Registered method names (``reference`` compares the reference with itself).
+    size
+        Width, height in pixels, each ≥ core.metrics.MIN_SIZE.
+    plan
+        From :func:`plan_parameters` for the reference and ``names``.
+    frames, warmup
+        Timed and untimed frames per method.
+    progress
+        Show a progress bar on stderr while the reference converges.
+
+    Raises
+    ------
+    ParameterError
+        If the camera sees no reflector (empty mask).
+    """
+    for name, value in plan.display.items():
+        session.renderer.display[name] = value
+    reference = session.method(ReferenceMethod.name)
+    reference.values.update(plan.methods[ReferenceMethod.name])
+    ref_run, mask = _converge(session, reference, size, progress)
+    exponent = float(reference.values["phong_exponent"])
+    frames_of: dict[str, tuple[Method, str | None, npt.NDArray, npt.NDArray]] = {}
+    for name in names:
+        if name == ReferenceMethod.name:
+            frames_of[name] = (reference, None, ref_run.hdr, ref_run.display)
+            continue
+        method = session.method(name)
+        method.values.update(plan.methods[name])
+        glossiness = None
+        if "lod_bias" not in plan.methods[name]:
+            glossiness = match_glossiness(method, exponent, session.gpu_scene.cube_size)
+        session.render_offscreen(method, size)
+        while not method.finished():
+            session.render_offscreen(method, size)
+        frames_of[name] = (method, glossiness, session.read_hdr(), _display_image(session, size))
+    timings = _time_methods(
+        session, [n for n in frames_of if n != ReferenceMethod.name], size, frames, warmup
+    )
+    timings[ReferenceMethod.name] = (
+        _summary(ref_run.frames_ms),
+        "median of its accumulation frames",
+    )
+    results = [
+        MethodResult(
+            name=name,
+            parameters=method.values.as_dict(),
+            matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
+            glossiness=glossiness,
+            metrics=compare_images(display, ref_run.display, mask),
+            relative_error=relative_error(hdr, ref_run.hdr),
+            frame_ms=timings[name][0],
+            timing=timings[name][1],
+            hdr=hdr,
+            display=display,
+        )
+        for name, (method, glossiness, hdr, display) in frames_of.items()
+    ]
+    camera = session.camera
+    return Comparison(
+        scene=session.scene.name,
+        size=tuple(size),
+        camera=(camera.azimuth, camera.elevation, camera.distance),
+        display=session.renderer.display.as_dict(),
+        device=describe(session.ctx),
+        mask=mask,
+        reference=ref_run,
+        results=results,
+    )
+
+
+def _converge(
+    session: RenderSession, reference: Method, size: tuple[int, int], progress: bool
+) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
+    """Accumulate until finished; the run and the mask. Raises on an empty mask."""
+    budget = int(reference.values["max_samples"])
+    frames_ms: list[float] = []
+    with tqdm(
+        total=budget,
+        desc="reference",
+        unit="spp",
+        file=sys.stderr,
+        disable=not progress,
+        bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
+    ) as bar:
+        frames_ms.append(_timed_frame(session, reference, size))
+        if not reference.coverage().any():
+            camera = session.camera
+            raise ParameterError(
+                f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
+                f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
+            )
+        while True:
+            bar.update(reference.status.samples - bar.n)
+            bar.set_postfix_str(reference.status_line())
+            if reference.finished():
+                break
+            frames_ms.append(_timed_frame(session, reference, size))
+    print(f"reference: {reference.status_line()}", file=sys.stderr)
+    mask = reference.coverage()
+    estimate_y = reference.estimate()[mask] @ LUMINANCE
+    error_y = reference.standard_error()[mask] @ LUMINANCE
+    lit = estimate_y > 0
+    run = ReferenceRun(
+        parameters=reference.values.as_dict(),
+        status=replace(reference.status),
+        frames_ms=frames_ms,
+        total_s=sum(frames_ms) / 1e3,
+        relative_standard_error=float(np.median(error_y[lit] / estimate_y[lit]))
+        if lit.any()
+        else float("inf"),
+        hdr=session.read_hdr(),
+        display=_display_image(session, size),
+    )
+    return run, mask
+
+
+def _time_methods(
+    session: RenderSession, names: list[str], size: tuple[int, int], frames: int, warmup: int
+) -> dict[str, tuple[dict[str, float], str]]:
+    """Method name → (median/p95 ms per frame, how it was measured), by the bench code path."""
+    if not names:
+        return {}
+    report = run_bench(session, names, size, frames, warmup, progress=False)
+    how = f"bench: median of {frames} frames after {warmup} warm-up"
+    return {name: (report["methods"][name]["frame"], how) for name in names}
+
+
+def _timed_frame(session: RenderSession, method: Method, size: tuple[int, int]) -> float:
+    """Render one frame; its wall time in ms with ``finish()`` at both ends (as bench)."""
+    session.ctx.finish()
+    start = time.perf_counter()
+    session.render_offscreen(method, size)
+    session.ctx.finish()
+    return (time.perf_counter() - start) * 1e3
+
+
+def _summary(samples: list[float]) -> dict[str, float]:
+    values = np.asarray(samples, dtype=np.float64)
+    return {"median_ms": float(np.median(values)), "p95_ms": float(np.percentile(values, 95))}
+
+
+def _display_image(session: RenderSession, size: tuple[int, int]) -> npt.NDArray[np.float32]:
+    """(h, w, 3) float32 of the last frame through the display shader, unquantised, in [0, 1]."""
+    texture = session.ctx.texture(size, 4, dtype="f4")
+    target = session.ctx.framebuffer([texture])
+    try:
+        session.renderer.present(target, (0, 0, *size))
+        data = np.frombuffer(target.read(components=3, dtype="f4"), dtype=np.float32)
+    finally:
+        target.release()
+        texture.release()
+    w, h = size
+    return np.clip(data.reshape(h, w, 3)[::-1], 0.0, 1.0)

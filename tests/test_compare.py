@@ -1,0 +1,204 @@
+"""``envstudio compare``: files, table, reliability and bad input; the metrics on known images."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from envstudio.cli import main
+from envstudio.core.latlong import texel_directions
+from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
+from envstudio.io.images import write_image
+from envstudio.methods.base import Method
+from envstudio.methods.parameters import Parameter
+from envstudio.methods.reference import ReferenceMethod
+from envstudio.prefilter.glossiness import lod_bias_for_exponent
+from envstudio.render.compare import match_glossiness, plan_parameters
+
+FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
+
+
+@pytest.fixture
+def small_scene(tmp_path):
+    """A glossy sphere under a smooth sky with one soft bright spot (converges in ~100 spp)."""
+    d = texel_directions(32)
+    sky = np.stack([0.4 + 0.3 * d[..., 1], 0.5 + 0.2 * d[..., 0], 0.8 - 0.3 * d[..., 2]], -1)
+    sky += 3.0 * np.exp(-8.0 * np.sum((d - [0.3, 0.5, 0.8]) ** 2, -1))[..., None]
+    write_image(tmp_path / "sky.exr", np.maximum(sky, 0.0))
+    scene = tmp_path / "ball.toml"
+    scene.write_text(
+        'name = "ball"\n[environment]\nfile = "sky.exr"\n'
+        "[camera]\nazimuth = 20.0\nelevation = 10.0\ndistance = 3.0\nfov = 45.0\n"
+        '[[object]]\nname = "ball"\nprimitive = "sphere"\nsize = 2.0\nrole = "reflector"\n'
+        "[object.material]\nkd = 0.3\nfresnel = 0.5\nphong_exponent = 20.0\n"
+    )
+    return scene
+
+
+def compare(scene, out, *extra):
+    return main(["compare", "--scene", str(scene), "--out", str(out), *FAST, *extra])
+
+
+def test_compare_writes_every_file_and_a_number_for_each_method(small_scene, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    status = compare(small_scene, out, "--methods", "mirror,reference", "--param", "tolerance=0.05")
+    printed = capsys.readouterr().out
+    assert status == 0
+    names = {p.name for p in out.iterdir()}
+    for method in ("mirror", "reference"):
+        assert {f"{method}.exr", f"{method}.png", f"{method}.flip.png"} <= names
+        assert f"{method}.relerr.png" in names
+    assert {"compare.md", "compare.json", "index.html"} <= names
+    assert not any(n.startswith(".") for n in names), "temporary files left behind"
+
+    report = json.loads((out / "compare.json").read_text())
+    assert report["reliable"] and report["reference"]["converged"]
+    assert report["mask_pixels"] > 100
+    # the reference takes --param values only it declares; mirror takes kd/fresnel from the scene
+    assert report["reference"]["parameters"]["tolerance"] == 0.05
+    assert report["methods"]["mirror"]["matched"] == {"fresnel": 0.5, "kd": pytest.approx(0.3)}
+    mirror = report["methods"]["mirror"]
+    assert 5.0 < mirror["psnr_db"] < 60.0
+    assert 0.0 < mirror["ssim"] < 1.0
+    assert 0.0 < mirror["flip"] < 1.0
+    assert mirror["frame_ms"]["median_ms"] > 0.0
+    # the reference against itself: identical on every reflector pixel
+    itself = report["methods"]["reference"]
+    assert float(itself["psnr_db"]) == math.inf
+    assert itself["ssim"] == pytest.approx(1.0, abs=1e-9)
+    assert itself["flip"] == 0.0
+
+    assert "| mirror |" in printed and "| reference | ∞" in printed
+    assert f"{mirror['psnr_db']:.2f}" in printed
+    assert (out / "compare.md").read_text().strip() == printed.strip()
+    page = (out / "index.html").read_text()
+    for name in ("reference.png", "mirror.png", "mirror.flip.png", "mirror.relerr.png"):
+        assert f'src="{name}"' in page
+    assert "http" not in page, "the page must be self-contained"
+
+
+def test_a_reference_out_of_budget_marks_every_metric_unreliable(small_scene, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    status = compare(
+        small_scene,
+        out,
+        "--methods",
+        "mirror",
+        "--param",
+        "max_samples=16",
+        "--param",
+        "tolerance=0.00001",
+    )
+    captured = capsys.readouterr()
+    assert status == 0
+    report = json.loads((out / "compare.json").read_text())
+    assert report["reliable"] is False
+    assert report["methods"]["mirror"]["reliable"] is False
+    assert "did not converge within max_samples=16" in report["unreliable_reason"]
+    row = next(line for line in captured.out.splitlines() if line.startswith("| mirror |"))
+    assert row.count("†") == 3 and "| no |" in row
+    assert "† unreliable: the reference did not converge" in captured.out
+    warnings = [line for line in captured.err.splitlines() if "unreliable" in line]
+    assert len(warnings) == 1
+    assert "unreliable" in (out / "index.html").read_text()
+
+
+def test_an_unknown_method_is_one_line_before_any_rendering(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "--methods", "mirror,nope", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown method 'nope'" in err[0]
+    assert not out.exists()
+
+
+def test_a_parameter_no_method_declares_is_an_error(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "--methods", "mirror", "--param", "lod_bias=2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "lod_bias" in err[0] and "no method" in err[0]
+
+
+def test_a_camera_that_sees_no_reflector_is_one_line(small_scene, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    # 500 units away the ball lies beyond the far plane (100): no reflector pixel
+    status = compare(small_scene, out, "--methods", "mirror", "--camera", "0,0,500")
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert len(err) == 1 and "empty mask" in err[0]
+    assert not out.exists()
+
+
+class _MipChain(Method):
+    """Not registered: a method that blurs by LOD bias only."""
+
+    name = "mip_chain_test"
+    title = summary = "test"
+    parameters = (
+        Parameter("lod_bias", "float", 0.0, 0.0, 8.0, "b"),
+        Parameter("fresnel", "float", 1.0, 0.0, 1.0),
+    )
+
+    def render(self, frame):
+        raise AssertionError("not drawn in this test")
+
+
+class _Phong(_MipChain):
+    name = "phong_test"
+    parameters = (*_MipChain.parameters, Parameter("phong_exponent", "float", 200.0, 1.0, 1e4))
+
+
+def test_parameters_go_to_every_method_that_declares_them():
+    plan = plan_parameters(
+        [ReferenceMethod, _MipChain], ["fresnel=0.5", "max_samples=64", "exposure=1"]
+    )
+    assert plan.methods["reference"] == {"fresnel": 0.5, "max_samples": 64}
+    assert plan.methods["mip_chain_test"] == {"fresnel": 0.5}
+    assert plan.display == {"exposure": 1.0}
+
+
+def test_a_lod_bias_method_gets_the_b_of_the_reference_exponent():
+    method = _MipChain(None, None)
+    line = match_glossiness(method, 50.0, 256)
+    expected = float(lod_bias_for_exponent(50.0, 256))
+    assert method.values["lod_bias"] == pytest.approx(expected)
+    assert f"b = {expected:.3f}" in line and "N = 50" in line
+    # a method with its own Phong exponent is matched by N itself
+    assert match_glossiness(_Phong(None, None), 50.0, 256) is None
+
+
+def image_pair(seed=0, size=32):
+    rng = np.random.default_rng(seed)
+    reference = rng.uniform(0.2, 0.8, (size, size, 3)).astype(np.float32)
+    mask = np.zeros((size, size), bool)
+    mask[8:20, 10:22] = True
+    return reference, mask
+
+
+def test_identical_images_give_infinite_psnr_ssim_one_flip_zero():
+    reference, mask = image_pair()
+    metrics = compare_images(reference, reference.copy(), mask)
+    assert metrics.psnr_db == math.inf
+    assert metrics.ssim == pytest.approx(1.0, abs=1e-9)
+    assert metrics.flip == 0.0
+
+
+def test_psnr_is_measured_on_the_mask_only():
+    reference, mask = image_pair()
+    test = reference + np.where(mask[..., None], 0.1, 0.5).astype(np.float32)
+    assert psnr(test, reference, mask) == pytest.approx(20.0, abs=1e-4)  # -10 log10(0.1²)
+
+
+def test_ssim_ignores_pixels_beyond_the_window_around_the_mask():
+    reference, mask = image_pair()
+    far = reference.copy()
+    far[26:, :] = 0.0  # ≥ 6 rows below the mask: outside every 11×11 window centred on it
+    assert ssim(far, reference, mask) == pytest.approx(1.0, abs=1e-9)
+    near = reference.copy()
+    near[10:14, 12:16] = 0.0
+    assert ssim(near, reference, mask) < 0.95
+
+
+def test_relative_error_is_the_luminance_ratio():
+    reference = np.full((4, 4, 3), 2.0, np.float32)
+    assert np.allclose(relative_error(reference * 1.1, reference), 0.1)
