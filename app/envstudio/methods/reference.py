@@ -265,11 +265,22 @@ class ReferenceMethod(Method):
             self._band_start = 0
 
     def _depth_prepass(self, frame: FrameInputs) -> None:
-        """Nearest reflector depth per pixel: with additive blending only it may be shaded."""
+        """Nearest surface depth per pixel: only the visible reflector surface is shaded.
+
+        With additive blending every fragment passing a plain depth test would
+        count, so the accumulation tests ``<=`` against this depth. Local objects
+        are included so reflector pixels hidden behind them get no samples
+        (and :meth:`coverage` leaves them out).
+        """
         self._depth_fbo.clear(depth=1.0)
         self._depth_fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST)
-        self._draw_reflectors(self.programs.get("reference/resolve.glsl"), frame)
+        program = self.programs.get("reference/resolve.glsl")
+        self._draw_reflectors(program, frame)
+        for gpu_node in frame.scene.local_objects():
+            set_uniform(program, "u_model", gpu_node.model)
+            set_uniform(program, "u_normal_matrix", gpu_node.normal)
+            gpu_node.mesh.render(program)
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
