@@ -49,11 +49,13 @@ from envstudio.gpu.context import describe
 from envstudio.methods.base import Method, method_class
 from envstudio.methods.parameters import parse_assignments
 from envstudio.methods.reference import ConvergenceStatus, ReferenceMethod
-from envstudio.prefilter.glossiness import lod_bias_for_exponent
 from envstudio.render.bench import run_bench
 from envstudio.render.display import DISPLAY_PARAMETERS
+from envstudio.render.matching import match_glossiness
 from envstudio.render.session import RenderSession
 
+NOISE_SHARE = 0.1
+"""Largest ratio of reference noise to a method's error for its metrics to count as reliable."""
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
 """Parameters listed as "matched" in the report when a method declares them."""
 
@@ -124,8 +126,10 @@ class ReferenceRun:
         )
         return (
             f"the reference did not converge within max_samples="
-            f"{self.parameters['max_samples']} spp ({measured}); its Monte Carlo noise is "
-            "part of every metric (raise max_samples or tolerance)"
+            f"{self.parameters['max_samples']} spp ({measured}) and its median relative "
+            f"standard error ({100 * self.relative_standard_error:.3g} %) is not below "
+            f"{NOISE_SHARE:g} of the marked methods' median relative error, so its Monte Carlo "
+            "noise is part of their metrics (raise max_samples or tolerance)"
         )
 
 
@@ -167,6 +171,8 @@ class MethodResult:
     timing: str
     hdr: npt.NDArray[np.float32]
     display: npt.NDArray[np.float32]
+    median_relative_error: float = float("nan")
+    reliable: bool = True
 
 
 @dataclass
@@ -203,8 +209,8 @@ class Comparison:
 
     @property
     def reliable(self) -> bool:
-        """Whether the metrics can be trusted (the reference converged)."""
-        return self.reference.converged
+        """Whether every method's metrics can be trusted (:func:`reliable_against`)."""
+        return all(result.reliable for result in self.results)
 
 
 def method_classes(names: Sequence[str]) -> list[type[Method]]:
@@ -255,36 +261,6 @@ def plan_parameters(classes: Sequence[type[Method]], assignments: Sequence[str])
     return plan
 
 
-def match_glossiness(method: Method, exponent: float, cube_size: int) -> str | None:
-    """Give a LOD-bias method the b that looks like Phong exponent N (prefilter/glossiness.py).
-
-    Applies to methods that declare ``lod_bias`` but not ``phong_exponent``;
-    b is clamped to the declared range.
-
-    Parameters
-    ----------
-    method
-        The method; its ``lod_bias`` value is set.
-    exponent
-        The reference's Phong exponent N.
-    cube_size
-        Face edge n of the cube map the method reads, texels.
-
-    Returns
-    -------
-    str or None
-        One line saying which b was used and why, or None when the method has no such bias.
-    """
-    if "lod_bias" not in method.values or "phong_exponent" in method.values:
-        return None
-    declared = next(p for p in method.values if p.name == "lod_bias")
-    fitted = float(lod_bias_for_exponent(exponent, cube_size))
-    b = float(np.clip(fitted, declared.minimum, declared.maximum))
-    method.values["lod_bias"] = b
-    clamped = "" if b == fitted else f" (fit {fitted:.3f}, clamped to the declared range)"
-    return f"b = {b:.3f} matched to N = {exponent:g} on a {cube_size}² cube{clamped}"
-
-
 def run_comparison(
     session: RenderSession,
     names: Sequence[str],
@@ -321,7 +297,6 @@ def run_comparison(
     reference = session.method(ReferenceMethod.name)
     reference.values.update(plan.methods[ReferenceMethod.name])
     ref_run, mask = _converge(session, reference, size, progress)
-    exponent = float(reference.values["phong_exponent"])
     frames_of: dict[str, tuple[Method, str | None, npt.NDArray, npt.NDArray]] = {}
     for name in names:
         if name == ReferenceMethod.name:
@@ -331,7 +306,7 @@ def run_comparison(
         method.values.update(plan.methods[name])
         glossiness = None
         if "lod_bias" not in plan.methods[name]:
-            glossiness = match_glossiness(method, exponent, session.gpu_scene.cube_size)
+            glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
         session.render_offscreen(method, size)
         while not method.finished():
             session.render_offscreen(method, size)
@@ -344,17 +319,21 @@ def run_comparison(
         "median of its accumulation frames",
     )
     results = [
-        MethodResult(
-            name=name,
-            parameters=method.values.as_dict(),
-            matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
-            glossiness=glossiness,
-            metrics=compare_images(display, ref_run.display, mask),
-            relative_error=relative_error(hdr, ref_run.hdr),
-            frame_ms=timings[name][0],
-            timing=timings[name][1],
-            hdr=hdr,
-            display=display,
+        _judge(
+            MethodResult(
+                name=name,
+                parameters=method.values.as_dict(),
+                matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
+                glossiness=glossiness,
+                metrics=compare_images(display, ref_run.display, mask),
+                relative_error=relative_error(hdr, ref_run.hdr),
+                frame_ms=timings[name][0],
+                timing=timings[name][1],
+                hdr=hdr,
+                display=display,
+            ),
+            ref_run,
+            mask,
         )
         for name, (method, glossiness, hdr, display) in frames_of.items()
     ]
@@ -369,6 +348,26 @@ def run_comparison(
         reference=ref_run,
         results=results,
     )
+
+
+def _judge(
+    result: MethodResult, reference: ReferenceRun, mask: npt.NDArray[np.bool_]
+) -> MethodResult:
+    """Set the method's median relative error and whether its metrics can be trusted.
+
+    Trusted when the reference converged, or when the reference's own noise
+    (its median relative standard error) is below :data:`NOISE_SHARE` of the
+    method's median relative error over the mask: the measured difference is
+    then the method's, not the reference's noise. The reference compared with
+    itself is exact.
+    """
+    result.median_relative_error = float(np.median(result.relative_error[mask]))
+    result.reliable = (
+        reference.converged
+        or result.name == ReferenceMethod.name
+        or reference.relative_standard_error < NOISE_SHARE * result.median_relative_error
+    )
+    return result
 
 
 def _converge(

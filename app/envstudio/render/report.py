@@ -137,13 +137,13 @@ def format_table(comparison: Comparison) -> str:
         "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | matched parameters |",
         "|:--|--:|--:|--:|--:|:--|:--|",
     ]
-    mark = "" if comparison.reliable else UNRELIABLE
     for result in comparison.results:
         m = result.metrics
+        mark = "" if result.reliable else UNRELIABLE
         lines.append(
             f"| {result.name} | {_psnr_text(m.psnr_db)}{mark} | {m.ssim:.4f}{mark} | "
             f"{m.flip:.4f}{mark} | {result.frame_ms['median_ms']:.2f} | "
-            f"{'yes' if comparison.reliable else 'no'} | {_matched_text(result)} |"
+            f"{'yes' if result.reliable else 'no'} | {_matched_text(result)} |"
         )
     lines.append("")
     if not comparison.reliable:
@@ -190,7 +190,8 @@ def to_json(comparison: Comparison) -> dict:
                 "psnr_db": _number(r.metrics.psnr_db),
                 "ssim": r.metrics.ssim,
                 "flip": r.metrics.flip,
-                "reliable": comparison.reliable,
+                "reliable": r.reliable,
+                "median_relative_error": _number(r.median_relative_error),
                 "frame_ms": r.frame_ms,
                 "timing": r.timing,
                 "files": _files(r.name),
@@ -257,17 +258,17 @@ relative luminance error of the linear frames over [0, {HEAT_SCALE:g}]; grey: no
 
 
 def _html_table(comparison: Comparison) -> str:
-    mark = "" if comparison.reliable else UNRELIABLE
     rows = []
     for r in comparison.results:
         m = r.metrics
+        mark = "" if r.reliable else UNRELIABLE
         cells = [
             f"<td>{html.escape(r.name)}</td>",
             f'<td class="n">{_psnr_text(m.psnr_db)}{mark}</td>',
             f'<td class="n">{m.ssim:.4f}{mark}</td>',
             f'<td class="n">{m.flip:.4f}{mark}</td>',
             f'<td class="n">{r.frame_ms["median_ms"]:.2f}</td>',
-            f"<td>{'yes' if comparison.reliable else 'no'}</td>",
+            f"<td>{'yes' if r.reliable else 'no'}</td>",
             f"<td>{html.escape(_matched_text(r))}</td>",
         ]
         rows.append(f"<tr>{''.join(cells)}</tr>")
