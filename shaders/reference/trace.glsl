@@ -80,21 +80,31 @@ bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 ba
 // Radiance arriving at p from direction l. Directions below the surface (the
 // part of the eq. 7 lobe under the horizon) see the environment, as in the
 // prefiltered-map methods. A local object returns its diffuse radiance
-// albedo/pi * E_sh9(n) (as the frame draws it); a reflector hit returns one
-// mirror bounce into the environment.
+// albedo/pi * E_sh9(n) (as the frame draws it); a reflector hit continues as a
+// mirror bounce, traced again (up to TRACE_BOUNCES hits, then black), so
+// self-reflections see the room and not the environment behind its walls.
+#define TRACE_BOUNCES 3
 vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
     if (dot(n, l) <= 0.0) return environment_radiance(l);
-    float t;
-    int tri;
-    vec2 uv;
-    if (!trace_closest(p + n * u_ray_offset, l, t, tri, uv)) return environment_radiance(l);
-    vec3 hit_normal = normalize((1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
-                                + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
-                                + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz);
-    if (dot(hit_normal, l) > 0.0) hit_normal = -hit_normal;
-    vec4 info = trace_fetch(u_bvh_triangles, 7 * tri + 6);
-    if (info.a < 0.5) {
-        return info.rgb / 3.14159265358979 * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
+    vec3 origin = p + n * u_ray_offset;
+    vec3 direction = l;
+    for (int bounce = 0; bounce < TRACE_BOUNCES; ++bounce) {
+        float t;
+        int tri;
+        vec2 uv;
+        if (!trace_closest(origin, direction, t, tri, uv)) return environment_radiance(direction);
+        vec3 hit_normal = normalize(
+            (1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
+            + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
+            + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz);
+        if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
+        vec4 info = trace_fetch(u_bvh_triangles, 7 * tri + 6);
+        if (info.a < 0.5) {
+            return info.rgb / 3.14159265358979
+                   * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
+        }
+        origin = origin + t * direction + hit_normal * u_ray_offset;
+        direction = reflect(direction, hit_normal);
     }
-    return environment_radiance(reflect(l, hit_normal));
+    return vec3(0.0);
 }
