@@ -10,6 +10,7 @@
 
 #define TRACE_TEXTURE_WIDTH 4096
 #define TRACE_STACK 48
+#define TRACE_EDGE_EPSILON 1e-5
 
 uniform sampler2D u_bvh_nodes;
 uniform sampler2D u_bvh_triangles;
@@ -33,7 +34,11 @@ float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
     vec3 q = cross(s, e1);
     uv.y = dot(d, q) * inv;
     float t = dot(e2, q) * inv;
-    if (uv.x < 0.0 || uv.y < 0.0 || uv.x + uv.y > 1.0 || t <= 1e-6) return -1.0;
+    // Triangles are widened by TRACE_EDGE_EPSILON (barycentric) so rays through a
+    // shared edge cannot slip between two triangles in float arithmetic and leak
+    // out of a closed room into the (bright) environment.
+    if (uv.x < -TRACE_EDGE_EPSILON || uv.y < -TRACE_EDGE_EPSILON
+        || uv.x + uv.y > 1.0 + TRACE_EDGE_EPSILON || t <= 1e-6) return -1.0;
     return t;
 }
 
@@ -78,14 +83,29 @@ bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 ba
 }
 
 // Radiance arriving at p from direction l. Directions below the surface (the
-// part of the eq. 7 lobe under the horizon) see the environment, as in the
-// prefiltered-map methods. A local object returns its diffuse radiance
+// part of the eq. 7 lobe under the horizon) are blocked by the surface itself:
+// no light arrives from inside the object (seed 000 eq. 1 integrates over the
+// hemisphere above the surface; without tracing the lobe is left whole, as the
+// prefiltered-map methods use it). A local object returns its diffuse radiance
 // albedo/pi * E_sh9(n) (as the frame draws it); a reflector hit continues as a
 // mirror bounce, traced again (up to TRACE_BOUNCES hits, then black), so
 // self-reflections see the room and not the environment behind its walls.
 #define TRACE_BOUNCES 3
+
+// Interpolated vertex normal at a hit, or the face normal where the vertex
+// normals cancel (seams and tips of open meshes): a zero-length normal would
+// make the bounce direction NaN, which misses everything and "sees" the sky.
+vec3 hit_shading_normal(int tri, vec2 uv) {
+    vec3 n = (1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
+             + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
+             + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz;
+    if (dot(n, n) > 1e-8) return normalize(n);
+    vec3 a = trace_fetch(u_bvh_triangles, 7 * tri).xyz;
+    return normalize(cross(trace_fetch(u_bvh_triangles, 7 * tri + 1).xyz - a,
+                           trace_fetch(u_bvh_triangles, 7 * tri + 2).xyz - a));
+}
 vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
-    if (dot(n, l) <= 0.0) return environment_radiance(l);
+    if (dot(n, l) <= 0.0) return vec3(0.0);
     vec3 origin = p + n * u_ray_offset;
     vec3 direction = l;
     for (int bounce = 0; bounce < TRACE_BOUNCES; ++bounce) {
@@ -93,10 +113,7 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
         int tri;
         vec2 uv;
         if (!trace_closest(origin, direction, t, tri, uv)) return environment_radiance(direction);
-        vec3 hit_normal = normalize(
-            (1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
-            + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
-            + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz);
+        vec3 hit_normal = hit_shading_normal(tri, uv);
         if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
         vec4 info = trace_fetch(u_bvh_triangles, 7 * tri + 6);
         if (info.a < 0.5) {
