@@ -1,4 +1,4 @@
-"""The ``envstudio`` command: view (default), render, methods, bench.
+"""The ``envstudio`` command: view (default), render, methods, bench, sh, figure, …
 
 Usage errors print one line and exit with status 2; nothing prints a traceback
 for bad input.
@@ -114,9 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     compare.add_argument("--frames", type=int, default=20, help="timed frames per method")
     compare.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
-    compare.add_argument(
-        "--out", required=True, help="folder for the images, table and index.html"
-    )
+    compare.add_argument("--out", required=True, help="folder for the images, table and index.html")
 
     fit = sub.add_parser(
         "fit-glossiness",
@@ -128,6 +126,45 @@ def build_parser() -> argparse.ArgumentParser:
     )
     fit.add_argument("--environments", nargs="+", metavar="NAME", help="shipped maps to fit")
     fit.add_argument("--directions", type=int, help="reflection directions per environment")
+
+    sh = sub.add_parser("sh", help="SH coefficients of an environment (seed 000 eq. 9-11)")
+    sh.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    sh.add_argument(
+        "--coefficients",
+        type=int,
+        choices=(9, 25, 49),
+        default=9,
+        help="SH order: 9 (eq. 9, default), 25 or 49 (bands with a non-zero cosine term)",
+    )
+    sh.add_argument(
+        "--lights", type=int, default=0, help="extract this many cap lights first (0..32)"
+    )
+    sh.add_argument(
+        "--threshold", type=float, default=1.0, help="light threshold in mean luminances"
+    )
+    sh.add_argument("--height", type=int, help="box-filter the map to this many rows first")
+    sh.add_argument(
+        "--cube", type=int, help="project a 6xNxN cube resampled from the map (N = this)"
+    )
+    sh.add_argument(
+        "--check",
+        action="store_true",
+        help="irradiance error against brute force over the same samples (2000 random normals)",
+    )
+    sh.add_argument("--json", action="store_true", help="machine-readable output")
+
+    figure = sub.add_parser("figure", help="render a figure of a seed paper")
+    figure.add_argument(
+        "name",
+        choices=("kautz-grid", "kautz-seams"),
+        help="kautz-grid: seed 000 Figure 6 (b x f_lambda); kautz-seams: Figure 4, "
+        "box vs cross-face mip chain at b = 9.4, with the seam measurement",
+    )
+    _add_scene_options(figure)
+    _add_param_option(figure)
+    figure.add_argument("--camera", help="AZIMUTH,ELEVATION,DISTANCE in degrees and scene units")
+    figure.add_argument("--size", default="192x192", help="one panel, WIDTHxHEIGHT")
+    figure.add_argument("-o", "--output", required=True, help="OUT.png")
     return parser
 
 

@@ -254,6 +254,165 @@ def run_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_sh(args: argparse.Namespace) -> int:
+    """``envstudio sh``: SH coefficients and extracted lights of an environment (seed 000 §4.1)."""
+    import time
+
+    from envstudio.core import cubemap, latlong
+    from envstudio.core.resample import latlong_to_cube
+    from envstudio.core.sh_bands import BAND_SETS, band_indices
+    from envstudio.core.sh_lights import DiffuseProjector
+    from envstudio.io.images import read_environment
+    from envstudio.prefilter.brute_force import downsample_latlong
+
+    if not 0 <= args.lights <= 32 or not args.threshold > 0:
+        raise ParameterError(
+            f"--lights {args.lights} --threshold {args.threshold}: expected 0..32 and > 0"
+        )
+    if args.cube is not None and not 8 <= args.cube <= 1024:
+        raise ParameterError(f"--cube {args.cube}: expected a face size in 8..1024")
+    radiance = read_environment(args.env)
+    if args.height is not None:
+        if args.height < 1 or radiance.shape[0] % args.height:
+            raise ParameterError(
+                f"--height {args.height}: expected a divisor of the map's {radiance.shape[0]} rows"
+            )
+        radiance = downsample_latlong(radiance, args.height)
+    if args.cube:
+        samples = latlong_to_cube(radiance, args.cube)
+        directions = cubemap.texel_directions(args.cube)
+        solid_angles = cubemap.texel_solid_angles(args.cube)
+        source = f"6x{args.cube}x{args.cube} cube"
+    else:
+        samples = radiance
+        directions = latlong.texel_directions(*radiance.shape[:2])
+        solid_angles = latlong.texel_solid_angles(*radiance.shape[:2])
+        source = f"{radiance.shape[1]}x{radiance.shape[0]} lat-long"
+    projector = DiffuseProjector(
+        directions,
+        solid_angles,
+        coefficients=args.coefficients,
+        lights=args.lights,
+        threshold=args.threshold,
+    )
+    times = []
+    for _ in range(5):
+        start = time.perf_counter()
+        lighting = projector.project(samples)
+        times.append((time.perf_counter() - start) * 1e3)
+    degree, order = band_indices(BAND_SETS[args.coefficients])
+    report = {
+        "environment": str(args.env),
+        "source": source,
+        "order": "seed 000 eq. 9 (bands 0, 1, 2, then the even bands), m = -l..l",
+        "l": degree.tolist(),
+        "m": order.tolist(),
+        "coefficients": lighting.coefficients.tolist(),
+        "lights": [
+            {"direction": row[:3].tolist(), "sin2_alpha": float(row[3]), "rgb": row[4:].tolist()}
+            for row in lighting.lights
+        ],
+        "projection_ms": min(times),
+    }
+    if args.check:
+        report["check"] = _irradiance_check(samples, directions, solid_angles, lighting)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    residual = f" of the residual after {len(lighting.lights)} lights" if args.lights else ""
+    print(f"{args.env}: {source} projected in {min(times):.2f} ms (best of 5); L_i{residual}")
+    print(f"{'i':>3} {'Y_i':<7} {'l':>2} {'m':>3} {'R':>12} {'G':>12} {'B':>12}")
+    for i, rgb in enumerate(lighting.coefficients):
+        name = _SH9_NAMES[i] if i < len(_SH9_NAMES) else ""
+        values = " ".join(f"{v:>12.6g}" for v in rgb)
+        print(f"{i:>3} {name:<7} {degree[i]:>2} {order[i]:>3} {values}")
+    for k, light in enumerate(report["lights"]):
+        d = ", ".join(f"{v:+.4f}" for v in light["direction"])
+        rgb = " ".join(f"{v:.6g}" for v in light["rgb"])
+        print(f"light {k:>2}: direction ({d}) sin²α {light['sin2_alpha']:.3g} moment {rgb}")
+    if args.check:
+        check = report["check"]
+        print(
+            f"irradiance vs brute force over the same {source} ({check['normals']} random "
+            f"normals, luminance): mean {check['mean_relative_error'] * 100:.2f} %, "
+            f"max {check['max_relative_error'] * 100:.2f} %"
+        )
+    return 0
+
+
+# The basis functions of seed 000 eq. 9, by index.
+_SH9_NAMES = ("1", "y", "z", "x", "xy", "yz", "3z²-1", "xz", "x²-y²")
+
+
+def _irradiance_check(radiance, directions, solid_angles, lighting, normals: int = 2000) -> dict:
+    """Relative error (luminance) of ``lighting``'s irradiance against the brute-force sum
+    Σ_k L_k max(n·d_k, 0) Δω_k over the samples it was projected from."""
+    import numpy as np
+
+    from envstudio.core.env_sampling import luminance
+
+    n = np.random.default_rng(0).normal(size=(normals, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+    weighted = luminance(radiance).reshape(-1) * np.asarray(solid_angles).reshape(-1)
+    truth = np.concatenate(
+        [np.maximum(n[i : i + 16] @ d.T, 0.0) @ weighted for i in range(0, normals, 16)]
+    )
+    error = np.abs(luminance(lighting.irradiance(n)) - truth) / truth
+    return {
+        "normals": normals,
+        "mean_relative_error": float(error.mean()),
+        "max_relative_error": float(error.max()),
+    }
+
+
+def run_figure(args: argparse.Namespace) -> int:
+    """``envstudio figure``: seed 000 Figure 6 (kautz-grid) or Figure 4 (kautz-seams)."""
+    from envstudio.render import figures
+
+    size = parse_size(args.size)
+    output = check_output_path(args.output)
+    if output.suffix.lower() != ".png":
+        raise ParameterError(f"-o {output}: expected a .png file name")
+    camera = parse_camera(args.camera) if args.camera else None
+    session = RenderSession(_scene(args))
+    try:
+        if camera:
+            session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+        method = session.method("kautz")
+        if args.name == "kautz-grid":
+            method.values.update(figures.FIGURE6_VALUES)
+            apply_params(session, method, args.param)
+            image = figures.render_figure6(session, size)
+            layout = (
+                f"rows b = {', '.join(map(str, figures.FIGURE6_LOD_BIAS))} (top to bottom), "
+                f"columns f_λ = {', '.join(map(str, figures.FIGURE6_FRESNEL))} (left to right)"
+            )
+        else:
+            method.values.update(figures.SEAM_VALUES)
+            apply_params(session, method, args.param)
+            image = figures.render_seam_pair(session, size)
+            layout = f"b = {figures.SEAM_LOD_BIAS}: box mip chain (left), cross-face (right)"
+            levels = figures.seam_levels(session)
+        write_image(output, image)
+    finally:
+        session.release()
+    print(f"{output}: {layout}")
+    if args.name == "kautz-seams":
+        print("mean step between neighbouring texels, across face edges / inside faces:")
+        print(
+            f"{'level':>5} {'face':>5} {'box across':>11} {'inside':>8} {'ratio':>6}   "
+            f"{'cross-face across':>17} {'inside':>8} {'ratio':>6}"
+        )
+        for s in levels:
+            print(
+                f"{s.level:>5} {s.size:>5} {s.box_across:>11.4g} {s.box_inside:>8.4g} "
+                f"{s.box_across / s.box_inside:>6.2f}   {s.cross_across:>17.4g} "
+                f"{s.cross_inside:>8.4g} {s.cross_across / s.cross_inside:>6.2f}"
+            )
+    return 0
+
+
 def run_view(args: argparse.Namespace) -> int:
     """``envstudio view``: the desktop viewer."""
     from envstudio.ui.app import run_viewer

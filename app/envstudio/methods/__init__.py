@@ -1,3 +1,3 @@
 """Renderers: one module per method, each registers itself with its declared parameters."""
 
-from envstudio.methods import mirror, reference  # noqa: F401
+from envstudio.methods import kautz, mirror, reference  # noqa: F401

@@ -1,0 +1,178 @@
+"""Per-frame cube-map capture of the surroundings of a reflector (seed 000 section 5.1).
+
+"From x we need to render the environment six times, i.e. one pass for every face
+of the cube map. All we need to do, is to set the field-of-view to 90 degrees and
+to rotate the view direction according to every face." :class:`DynamicCube` does
+that from the reflector's centre: each face draws the environment at infinity
+(the shared cube map, as the frame's background pass does) and the scene's local
+objects over it (diffuse, lit by the environment's SH9, as the frame's local pass
+does), into a scratch RGBA32F target whose pixels a pixel buffer copies into the
+face on the GPU (moderngl cannot attach a cube face to a framebuffer). The mip
+chain is then the hardware box filter or the cross-face filter of
+:mod:`envstudio.envmap.mipmaps`.
+
+Face cameras, from the OpenGL cube-map table (core.cubemap): a face texel at
+(a, b) = (2s − 1, 2t − 1) looks along forward + a · right + b · up, so the view
+rotation has the rows (right, up, −forward) and a 90° projection puts (a, b) at
+normalised device coordinates (a, b); framebuffer row 0 (y = −1) is t = 0, the
+face's row 0, so the pixels are copied without a flip::
+
+    face   forward   right     up
+    +X     +x        −z        −y
+    −X     −x        +z        −y
+    +Y     +y        +x        +z
+    −Y     −y        +x        −z
+    +Z     +z        +x        −y
+    −Z     −z        −x        −y
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import moderngl
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core.transforms import Mat4, perspective
+from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
+from envstudio.gpu.fullscreen import FullscreenPass
+from envstudio.gpu.mesh import GpuMesh
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.gpu.uniforms import set_uniform
+
+__all__ = ["FACE_AXES", "DynamicCube", "LocalObject", "face_view"]
+
+#: What the capture draws of a local object: mesh, model matrix (4, 4), normal
+#: matrix (3, 3) and diffuse albedo (r, g, b).
+LocalObject = tuple[GpuMesh, Mat4, npt.NDArray[np.float32], tuple[float, float, float]]
+
+#: (forward, right, up) world axes of the six face cameras, OpenGL face order.
+FACE_AXES = np.array(
+    [
+        [[1, 0, 0], [0, 0, -1], [0, -1, 0]],
+        [[-1, 0, 0], [0, 0, 1], [0, -1, 0]],
+        [[0, 1, 0], [1, 0, 0], [0, 0, 1]],
+        [[0, -1, 0], [1, 0, 0], [0, 0, -1]],
+        [[0, 0, 1], [1, 0, 0], [0, -1, 0]],
+        [[0, 0, -1], [-1, 0, 0], [0, -1, 0]],
+    ],
+    dtype=np.float64,
+)
+
+
+def face_view(face: int, centre: npt.ArrayLike) -> Mat4:
+    """World → view matrix of the camera of cube face ``face`` at ``centre``.
+
+    Parameters
+    ----------
+    face
+        0 … 5, OpenGL face order.
+    centre
+        (3,) float, the capture point in world space.
+
+    Returns
+    -------
+    (4, 4) float32
+        Rotation rows (right, up, −forward) of :data:`FACE_AXES`, then −centre.
+    """
+    forward, right, up = FACE_AXES[face]
+    view = np.eye(4)
+    view[:3, :3] = np.stack([right, up, -forward])
+    view[:3, 3] = -view[:3, :3] @ np.asarray(centre, dtype=np.float64)
+    return view.astype(np.float32)
+
+
+class DynamicCube:
+    """A cube map re-rendered from a point every frame, with its mip chain.
+
+    Parameters
+    ----------
+    ctx, programs
+        Context and its program library (the cross-face chain needs OpenGL 4.3).
+    size
+        Face edge n in texels of level 0.
+    near, far
+        Clip distances of the face cameras in scene units.
+    """
+
+    def __init__(
+        self,
+        ctx: moderngl.Context,
+        programs: ProgramLibrary,
+        size: int,
+        near: float = 0.01,
+        far: float = 1000.0,
+    ):
+        self.ctx = ctx
+        self.programs = programs
+        self.size = size
+        self.projection = perspective(90.0, 1.0, near, far)
+        self.cube: moderngl.TextureCube | None = mipmapped_cube(ctx, size)
+        self._colour = ctx.texture((size, size), 4, dtype="f4")
+        self._depth = ctx.depth_renderbuffer((size, size))
+        self._fbo = ctx.framebuffer([self._colour], self._depth)
+        self._pixels = ctx.buffer(reserve=size * size * 16)
+        self._fullscreen = FullscreenPass(ctx)
+
+    def capture(
+        self,
+        environment: moderngl.TextureCube,
+        sh9: npt.ArrayLike,
+        objects: Sequence[LocalObject],
+        centre: npt.ArrayLike,
+    ) -> None:
+        """Render the six faces of level 0 from ``centre``: background, then local objects.
+
+        Parameters
+        ----------
+        environment
+            The environment at infinity (its level 0 is the background).
+        sh9
+            (9, 3) float, the environment's SH coefficients that light the local objects.
+        objects
+            The local objects to draw (never the reflector itself).
+        centre
+            (3,) float, world-space capture point (the reflector's centre).
+        """
+        background = self.programs.get("frame/background.glsl")
+        local = self.programs.get("frame/local_diffuse.glsl")
+        environment.use(location=0)
+        set_uniform(background, "u_environment", 0)
+        set_uniform(local, "u_sh9", np.asarray(sh9, dtype=np.float32))
+        set_uniform(local, "u_projection", self.projection)
+        with self.ctx.scope(self._fbo, enable_only=moderngl.DEPTH_TEST):
+            self.ctx.viewport = (0, 0, self.size, self.size)
+            for face in range(6):
+                view = face_view(face, centre)
+                rotation = view.astype(np.float64)
+                rotation[:3, 3] = 0.0
+                inverse = np.linalg.inv(self.projection.astype(np.float64) @ rotation)
+                self._fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+                set_uniform(background, "u_inverse_view_projection", inverse.astype(np.float32))
+                self.ctx.disable(moderngl.DEPTH_TEST)
+                self._fullscreen.draw(background)
+                self.ctx.enable(moderngl.DEPTH_TEST)
+                set_uniform(local, "u_view", view)
+                for mesh, model, normal, albedo in objects:
+                    set_uniform(local, "u_model", model)
+                    set_uniform(local, "u_normal_matrix", normal)
+                    set_uniform(local, "u_albedo", tuple(float(c) for c in albedo))
+                    mesh.render(local)
+                self._fbo.read_into(self._pixels, components=4, dtype="f4")
+                self.cube.write(face, self._pixels)
+
+    def build_mipmaps(self, cross_face: bool) -> None:
+        """Rebuild levels 1 … from level 0: hardware box filter, or the cross-face filter."""
+        if cross_face:
+            build_cross_face_mipmaps(self.ctx, self.programs, self.cube)
+        else:
+            self.cube.build_mipmaps()
+
+    def release(self) -> None:
+        """Free the cube map, targets and buffers; safe to call twice."""
+        for obj in (self._fbo, self._colour, self._depth, self._pixels, self.cube):
+            if obj is not None:
+                obj.release()
+        self._fbo = self._colour = self._depth = self._pixels = self.cube = None
+        self._fullscreen.release()

@@ -1,0 +1,36 @@
+// The diffuse term of method `kautz`: irradiance E(n) from the uniform block
+// KautzDiffuse, which core.sh_lights.DiffuseLighting.block (static environments)
+// or kautz/reduce.glsl (dynamic ones, on the GPU) fills:
+//   u_sh[i]              vec4(A_l L_i, 0): SH coefficients already convolved with the
+//                        clamped cosine (seed 000 eq. 12), storage order of
+//                        common/sh_bands.glsl
+//   u_light_direction[k] vec4(unit direction, sin^2 alpha) of cap light k
+//   u_light_rgb[k]       vec4(moment magnitude per channel, 0)
+// E(n) = sum_i u_sh[i] Y_i(n) + sum_k rgb_k cap_irradiance(n . dir_k, sin^2 alpha_k).
+// Defines: SH_COEFFICIENTS (9, 25, 49), LIGHTS (0 .. 32).
+#include "common/sh_bands.glsl"
+#include "common/cap_light.glsl"
+
+layout(std140) uniform KautzDiffuse {
+    vec4 u_sh[SH_COUNT];
+#if LIGHTS > 0
+    vec4 u_light_direction[LIGHTS];
+    vec4 u_light_rgb[LIGHTS];
+#endif
+};
+
+vec3 kautz_irradiance(vec3 n) {
+    float y[SH_COUNT];
+    sh_bands_basis(n, y);
+    vec3 e = vec3(0.0);
+    for (int i = 0; i < SH_COUNT; ++i) {
+        e += u_sh[i].rgb * y[i];
+    }
+#if LIGHTS > 0
+    for (int k = 0; k < LIGHTS; ++k) {
+        vec4 light = u_light_direction[k];
+        e += u_light_rgb[k].rgb * cap_irradiance(dot(n, light.xyz), light.w);
+    }
+#endif
+    return max(e, vec3(0.0));
+}
