@@ -354,7 +354,8 @@ class ReferenceMethod(Method):
         if self._snapshot is not None and mask.any():
             diff = current[mask] - self._snapshot[mask]
             norm = np.sqrt(np.mean(current[mask] ** 2))
-            change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else 0.0
+            # an all-black estimate has not converged to anything: never call it converged
+            change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else float("inf")
             self.status.rms_change = change
             self.status.converged = change < float(self.values["tolerance"])
         self._snapshot = current
