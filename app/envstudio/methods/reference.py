@@ -121,7 +121,7 @@ class ReferenceMethod(Method):
             "float",
             200.0,
             1.0,
-            10000.0,
+            1_000_000.0,
             "N",
             "Phong exponent (microfacet: alpha = sqrt(2 / (4N + 2))).",
             log=True,
