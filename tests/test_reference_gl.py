@@ -15,7 +15,7 @@ SIZE = (40, 40)
 
 def converge(session: RenderSession, batches: int, **params):
     method = session.method("reference")
-    method.values.update({"trace": False, **params})
+    method.values.update({"trace": False, "pixel_filter": False, **params})
     session.renderer.display["background"] = False
     for _ in range(batches):
         session.render_offscreen(method, SIZE)

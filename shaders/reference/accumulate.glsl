@@ -1,4 +1,4 @@
-#version 330 core
+#version 400 core
 // Method `reference`, accumulation pass: each frame adds one batch of
 // u_samples multiple-importance-sampled estimates (stratified within the batch
 // by randomised QMC, common/random.glsl) (balance heuristic, Veach
@@ -100,16 +100,24 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     return result;
 }
 
+uniform bool u_pixel_filter;
+
 void main() {
-    vec3 n = normalize(v_world_normal);
-    vec3 v = normalize(u_camera_position - v_world_position);
-    if (dot(n, v) < 0.0) n = -n;
-    vec3 r = reflect(-v, n);
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     vec3 batch = vec3(0.0);
     for (int i = 0; i < u_samples; ++i) {
-        batch += u_brdf_model == 0 ? sample_eq8(v_world_position, n, v, r, pixel, uint(i))
-                              : sample_microfacet(v_world_position, n, v, pixel, uint(i));
+        // With the pixel filter each sample sees another point of the pixel's
+        // footprint (box filter, stratified): the anti-aliased image that
+        // mip-mapped lookups approximate. Without it, the pixel centre only.
+        vec2 offset = u_pixel_filter ? stratified2(pixel, uint(u_frame), 6u, uint(i)) - 0.5
+                                     : vec2(0.0);
+        vec3 p = interpolateAtOffset(v_world_position, offset);
+        vec3 n = normalize(interpolateAtOffset(v_world_normal, offset));
+        vec3 v = normalize(u_camera_position - p);
+        if (dot(n, v) < 0.0) n = -n;
+        vec3 r = reflect(-v, n);
+        batch += u_brdf_model == 0 ? sample_eq8(p, n, v, r, pixel, uint(i))
+                                   : sample_microfacet(p, n, v, pixel, uint(i));
     }
     batch /= float(u_samples);
     f_sum = vec4(batch, 1.0);

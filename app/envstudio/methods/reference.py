@@ -134,6 +134,13 @@ class ReferenceMethod(Method):
             help="Trace the scene's triangles: self-occlusion, local and self-reflections.",
         ),
         Parameter(
+            "pixel_filter",
+            "bool",
+            True,
+            help="Average each pixel's footprint (anti-aliased, as mip-mapped methods see it); "
+            "off: the pixel centre only.",
+        ),
+        Parameter(
             "samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."
         ),
         Parameter(
@@ -297,6 +304,7 @@ class ReferenceMethod(Method):
         for name in ("kd", "fresnel", "phong_exponent"):
             set_uniform(program, f"u_{name}", float(self.values[name]))
         set_uniform(program, "u_samples", int(self.values["samples"]))
+        set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
         set_uniform(program, "u_frame", self.status.batches)
         self._fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
