@@ -32,6 +32,7 @@ from moderngl_window.context.base import BaseWindow, KeyModifiers
 from moderngl_window.timers.clock import Timer
 
 from envstudio.errors import ParameterError, UserError
+from envstudio.gpu.programs import ShaderCompileError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.images import HDR_SUFFIXES
 from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
@@ -433,8 +434,10 @@ class Viewer(WindowConfig):
                     screen,
                     (0, 0, *size),
                 )
-        except UserError as exc:
-            self._report_render_error(f"{self.method_name}: {exc}")
+        except (UserError, ShaderCompileError) as exc:
+            # a bad value, or a shader this driver cannot compile (e.g. the reference
+            # needs GLSL 4.00): say so and keep the viewer running
+            self._report_render_error(f"{self.method_name}: {str(exc).splitlines()[0]}")
         else:
             self._render_error = None
             self.history.add(frametime * 1e3, stats)
