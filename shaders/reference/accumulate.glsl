@@ -37,31 +37,38 @@ layout(location = 1) out vec4 f_sum_sq;
 
 float balance(float a, float b) { return a / max(a + b, 1e-30); }
 
-// One MIS sample pair for D (cosine lobe) and P (Phong lobe).
+// One MIS sample pair for D (cosine lobe) and P (Phong lobe): four directions
+// with their weights, then one loop that traces them (a single call site of
+// incident(), so the traversal is compiled once).
 vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     float N = u_phong_exponent;
     float F = schlick_fresnel(u_fresnel, dot(n, v));
-    vec3 diffuse = vec3(0.0);
-    vec3 glossy = vec3(0.0);
-    // cosine-lobe sample (pdf = f)
-    vec3 l = sample_cosine(n, stratified2(pixel, uint(u_frame), 0u, index));
-    float pdf_f = max(dot(n, l), 0.0) / PI;
-    if (pdf_f > 0.0) diffuse += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
+    float diffuse_weight = (1.0 - F) * u_kd;
+    vec3 directions[4];
+    float weights[4];
+    // cosine-lobe sample for D (pdf = f)
+    directions[0] = sample_cosine(n, stratified2(pixel, uint(u_frame), 0u, index));
+    float pdf = max(dot(n, directions[0]), 0.0) / PI;
+    weights[0] = pdf > 0.0 ? diffuse_weight * balance(pdf, env_pdf(directions[0])) : 0.0;
     // environment sample for D
-    l = sample_environment(stratified2(pixel, uint(u_frame), 1u, index));
-    float pdf_e = env_pdf(l);
-    float f = max(dot(n, l), 0.0) / PI;
-    if (f > 0.0) diffuse += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
-    // Phong-lobe sample (pdf = lobe)
-    l = sample_phong(r, N, stratified2(pixel, uint(u_frame), 2u, index));
-    pdf_f = phong_lobe(r, l, N);
-    if (pdf_f > 0.0) glossy += balance(pdf_f, env_pdf(l)) * incident(p, n, l);
+    directions[1] = sample_environment(stratified2(pixel, uint(u_frame), 1u, index));
+    pdf = env_pdf(directions[1]);
+    float f = max(dot(n, directions[1]), 0.0) / PI;
+    weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
+    // Phong-lobe sample for P (pdf = lobe)
+    directions[2] = sample_phong(r, N, stratified2(pixel, uint(u_frame), 2u, index));
+    pdf = phong_lobe(r, directions[2], N);
+    weights[2] = pdf > 0.0 ? F * balance(pdf, env_pdf(directions[2])) : 0.0;
     // environment sample for P
-    l = sample_environment(stratified2(pixel, uint(u_frame), 3u, index));
-    pdf_e = env_pdf(l);
-    f = phong_lobe(r, l, N);
-    if (f > 0.0) glossy += balance(pdf_e, f) * f * incident(p, n, l) / pdf_e;
-    return (1.0 - F) * u_kd * diffuse + F * glossy;
+    directions[3] = sample_environment(stratified2(pixel, uint(u_frame), 3u, index));
+    pdf = env_pdf(directions[3]);
+    f = phong_lobe(r, directions[3], N);
+    weights[3] = f > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
+    vec3 total = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        if (weights[k] > 0.0) total += weights[k] * incident(p, n, directions[k]);
+    }
+    return total;
 }
 
 // One MIS sample pair for the microfacet BRDF times the cosine.
