@@ -103,6 +103,8 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         (["render", "-o", "OUT.txt"], ["OUT.txt", ".png or .exr"]),
         (["render", "--scene", "nowhere", "-o", "OUT"], ["nowhere", "studio"]),
         (["bench", "--methods", "mirror,nope"], ["unknown method 'nope'"]),
+        (["bench", "--converge", "--methods", "kautz"], ["--converge", "only 'reference'"]),
+        (["bench", "--converge", "--time-limit", "-1"], ["--time-limit -1", "positive"]),
         (["render", "--bogus", "-o", "OUT"], ["unrecognized arguments: --bogus"]),
     ],
 )

@@ -15,7 +15,8 @@ SIZE = (40, 40)
 
 def converge(session: RenderSession, batches: int, **params):
     method = session.method("reference")
-    method.values.update({"trace": False, "pixel_filter": False, **params})
+    # independent batches: the spread of batch means is then an exact standard error
+    method.values.update({"trace": False, "pixel_filter": False, "sequence": "random", **params})
     session.renderer.display["background"] = False
     for _ in range(batches):
         session.render_offscreen(method, SIZE)
@@ -111,6 +112,28 @@ def test_diffuse_and_glossy_match_brute_force_within_the_reported_confidence(gl_
     assert 0.3 < np.mean(z**2) < 3.0, "the reported error is not the actual spread"
     assert abs(np.mean(est / expected[inside]) - 1) < 0.005
     session.release()
+
+
+def test_sobol_sequence_beats_independent_batches_and_its_error_bar_is_an_upper_bound(gl_ctx):
+    img = smooth_environment()
+    errors = {}
+    for sequence in ("random", "sobol"):
+        session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+        method, inside, normal, view = converge(
+            session, 16, kd=0.8, fresnel=0.2, phong_exponent=30.0, samples=8, sequence=sequence
+        )
+        cos = np.sum(normal * view, -1)
+        F = schlick(0.2, cos)[..., None]
+        r = 2 * cos[..., None] * normal - view
+        expected = (1 - F) * 0.8 * brute_force.irradiance(img, normal) / np.pi
+        expected = (expected + F * brute_force.phong(img, r, 30.0))[inside]
+        est, se = method.estimate()[inside], method.standard_error()[inside]
+        errors[sequence] = np.sqrt(np.mean((est / expected - 1) ** 2))
+        assert abs(np.mean(est / expected) - 1) < 0.005, sequence
+        z2 = np.mean(((est - expected) / se) ** 2)
+        session.release()
+    assert errors["sobol"] < 0.5 * errors["random"], errors
+    assert z2 < 0.5, f"sobol: mean z^2 {z2:.2f}: the batch spread should overstate the error"
 
 
 def test_diffuse_part_matches_brute_force_irradiance_within_half_a_percent(gl_ctx):

@@ -94,6 +94,17 @@ def build_parser() -> argparse.ArgumentParser:
         default=0,
         help="subdivide the reflector until it has at least this many triangles",
     )
+    bench.add_argument(
+        "--converge",
+        action="store_true",
+        help="time the reference to its tolerance (successive-half change) instead",
+    )
+    bench.add_argument(
+        "--time-limit",
+        type=float,
+        default=3600.0,
+        help="with --converge: stop after this many seconds and project the rest",
+    )
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
 

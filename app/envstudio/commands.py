@@ -143,6 +143,8 @@ def run_bench(args: argparse.Namespace) -> int:
     from envstudio.render.bench import run_bench as bench
 
     size = parse_size(args.size)
+    if args.converge:
+        return _run_convergence(args, size)
     names = args.methods.split(",") if args.methods else list(available_methods())
     for name in names:
         method_class(name)
@@ -171,6 +173,30 @@ def run_bench(args: argparse.Namespace) -> int:
     finally:
         session.release()
     print(format_report(report))
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+    return 0
+
+
+def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
+    """``envstudio bench --converge``: the reference's time to its tolerance."""
+    from envstudio.render.convergence import format_convergence, run_convergence
+
+    if args.methods not in (None, "reference"):
+        raise ParameterError(f"--converge --methods {args.methods}: only 'reference' converges")
+    if not args.time_limit > 0:
+        raise ParameterError(f"--time-limit {args.time_limit}: expected a positive number")
+    json_out = check_output_path(args.json_out) if args.json_out else None
+    session = RenderSession(_scene(args))
+    try:
+        method = session.method("reference")
+        apply_params(session, method, args.param)
+        report = run_convergence(
+            session, method, size, args.time_limit, progress=sys.stderr.isatty()
+        )
+    finally:
+        session.release()
+    print(format_convergence(report))
     if json_out:
         write_text_atomic(json_out, json.dumps(report, indent=2))
     return 0

@@ -1,8 +1,8 @@
 #version 400 core
 // Method `reference`, accumulation pass: each frame adds one batch of
-// u_samples multiple-importance-sampled estimates (stratified within the batch
-// by randomised QMC, common/random.glsl) (balance heuristic, Veach
-// 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel.
+// u_samples multiple-importance-sampled estimates (balance heuristic, Veach
+// 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel, drawn
+// by randomised QMC (sample2 below).
 //
 // Model 0 (seed 000 eq. 8): L_o = (1 - F) k_d D + F P with Schlick F(n.v)
 //   D = 1/pi  int L(l) max(n.l, 0) dl         (eq. 3-4: cosine lobe + environment sampling)
@@ -30,6 +30,21 @@ uniform float u_phong_exponent;
 uniform int u_samples;
 uniform int u_frame;
 
+uniform int u_sequence;
+
+// Number of this batch's first sample in the pixel's sequence (set by main).
+uint g_first_sample;
+
+// Two numbers in [0, 1) for sample i of this batch and one technique.
+// Sequence 0: independent batches, R2-stratified within each (the spread of
+// batch means is an honest standard error). Sequence 1: one Owen-scrambled
+// Sobol sequence per pixel continued across batches (errors fall faster; the
+// spread of batch means then overstates them).
+vec2 sample2(uvec2 pixel, uint technique, uint i) {
+    if (u_sequence == 1) return sobol2(pixel, technique, g_first_sample + i);
+    return stratified2(pixel, uint(u_frame), technique, i);
+}
+
 in vec3 v_world_position;
 in vec3 v_world_normal;
 layout(location = 0) out vec4 f_sum;
@@ -47,20 +62,20 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     vec3 directions[4];
     float weights[4];
     // cosine-lobe sample for D (pdf = f)
-    directions[0] = sample_cosine(n, stratified2(pixel, uint(u_frame), 0u, index));
+    directions[0] = sample_cosine(n, sample2(pixel, 0u, index));
     float pdf = max(dot(n, directions[0]), 0.0) / PI;
     weights[0] = pdf > 0.0 ? diffuse_weight * balance(pdf, env_pdf(directions[0])) : 0.0;
     // environment sample for D
-    directions[1] = sample_environment(stratified2(pixel, uint(u_frame), 1u, index));
+    directions[1] = sample_environment(sample2(pixel, 1u, index));
     pdf = env_pdf(directions[1]);
     float f = max(dot(n, directions[1]), 0.0) / PI;
     weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
     // Phong-lobe sample for P (pdf = lobe)
-    directions[2] = sample_phong(r, N, stratified2(pixel, uint(u_frame), 2u, index));
+    directions[2] = sample_phong(r, N, sample2(pixel, 2u, index));
     pdf = phong_lobe(r, directions[2], N);
     weights[2] = pdf > 0.0 ? F * balance(pdf, env_pdf(directions[2])) : 0.0;
     // environment sample for P
-    directions[3] = sample_environment(stratified2(pixel, uint(u_frame), 3u, index));
+    directions[3] = sample_environment(sample2(pixel, 3u, index));
     pdf = env_pdf(directions[3]);
     f = phong_lobe(r, directions[3], N);
     weights[3] = f > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
@@ -78,7 +93,7 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     float F_view = schlick_fresnel(u_fresnel, n_dot_v);
     vec3 result = vec3(0.0);
     for (int technique = 0; technique < 2; ++technique) {
-        vec2 xi = stratified2(pixel, uint(u_frame), 4u + uint(technique), index);
+        vec2 xi = sample2(pixel, 4u + uint(technique), index);
         vec3 l;
         if (technique == 0) {
             vec3 h = sample_ggx_half(n, alpha, xi);
@@ -112,11 +127,12 @@ uniform bool u_pixel_filter;
 void main() {
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     vec3 batch = vec3(0.0);
+    g_first_sample = uint(u_frame) * uint(u_samples);
     for (int i = 0; i < u_samples; ++i) {
         // With the pixel filter each sample sees another point of the pixel's
         // footprint (box filter, stratified): the anti-aliased image that
         // mip-mapped lookups approximate. Without it, the pixel centre only.
-        vec2 offset = u_pixel_filter ? stratified2(pixel, uint(u_frame), 6u, uint(i)) - 0.5
+        vec2 offset = u_pixel_filter ? sample2(pixel, 6u, uint(i)) - 0.5
                                      : vec2(0.0);
         vec3 p = interpolateAtOffset(v_world_position, offset);
         vec3 n = normalize(interpolateAtOffset(v_world_normal, offset));

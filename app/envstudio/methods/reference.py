@@ -6,6 +6,12 @@ GGX lobe sampling combined with environment sampling by luminance, balance
 heuristic), accumulated with additive blending in float targets together with
 the squares of the batch means, so each pixel carries its own standard error.
 
+Samples come from one Owen-scrambled Sobol sequence per pixel continued
+across batches (``sequence=sobol``, randomised quasi-Monte Carlo: errors fall
+faster than 1/sqrt(n)) or from independent batches (``sequence=random``, whose
+batch-mean spread is an exact standard error; under ``sobol`` it overstates
+the error).
+
 Convergence is judged by the successive-half criterion: at every doubling of
 the batch count the estimate I_n is compared with I_{n/2}; the reference is
 converged when RMS(I_n − I_{n/2}) / RMS(I_n) over the reflector pixels falls
@@ -33,6 +39,7 @@ from envstudio.methods.parameters import Parameter
 from envstudio.methods.tracing import TraceData
 
 MODELS = ("phong", "microfacet")
+SEQUENCES = ("random", "sobol")
 
 
 @dataclass
@@ -47,6 +54,8 @@ class ConvergenceStatus:
         Estimates per pixel (batches × samples per batch).
     rms_change : float or None
         RMS(I_n − I_{n/2}) / RMS(I_n) at the last doubling (None before the second).
+    checked_samples : int
+        ``samples`` at that doubling (0 before it).
     converged : bool
         ``rms_change`` is below the tolerance.
     """
@@ -54,6 +63,7 @@ class ConvergenceStatus:
     batches: int = 0
     samples: int = 0
     rms_change: float | None = None
+    checked_samples: int = 0
     converged: bool = False
 
     def describe(self) -> str:
@@ -139,6 +149,14 @@ class ReferenceMethod(Method):
             True,
             help="Average each pixel's footprint (anti-aliased, as mip-mapped methods see it); "
             "off: the pixel centre only.",
+        ),
+        Parameter(
+            "sequence",
+            "choice",
+            "sobol",
+            choices=SEQUENCES,
+            help="sobol: one scrambled Sobol sequence per pixel (faster convergence; the "
+            "standard error shown is then an upper bound); random: independent batches.",
         ),
         Parameter(
             "samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."
@@ -304,6 +322,7 @@ class ReferenceMethod(Method):
         for name in ("kd", "fresnel", "phong_exponent"):
             set_uniform(program, f"u_{name}", float(self.values[name]))
         set_uniform(program, "u_samples", int(self.values["samples"]))
+        set_uniform(program, "u_sequence", SEQUENCES.index(self.values["sequence"]))
         set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
         set_uniform(program, "u_frame", self.status.batches)
         self._fbo.use()
@@ -365,6 +384,7 @@ class ReferenceMethod(Method):
             # an all-black estimate has not converged to anything: never call it converged
             change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else float("inf")
             self.status.rms_change = change
+            self.status.checked_samples = self.status.samples
             self.status.converged = change < float(self.values["tolerance"])
         self._snapshot = current
 

@@ -1,0 +1,54 @@
+"""``bench --converge``: the reference timed to its tolerance, and the projection past a limit."""
+
+import numpy as np
+import pytest
+
+from envstudio.render.convergence import format_convergence, project, run_convergence
+from envstudio.render.session import RenderSession
+from envstudio.scene.environment import Environment
+from test_reference_gl import smooth_environment
+from test_render_gl import sphere_scene
+
+
+def test_projection_recovers_a_power_law():
+    # change = 0.5 / sqrt(n), 2 ms per sample: 0.1 % at n = 250 000, 500 s
+    checks = [
+        {"samples": n, "change": 0.5 / np.sqrt(n), "seconds": 0.002 * n}
+        for n in (64, 128, 256, 512, 1024)
+    ]
+    projection = project(checks, 0.001)
+    assert projection["slope"] == pytest.approx(-0.5, abs=1e-9)
+    assert projection["samples"] == pytest.approx(250_000, rel=1e-6)
+    assert projection["seconds"] == pytest.approx(500, rel=1e-6)
+
+
+def test_no_projection_from_one_check_or_a_flat_change():
+    assert project([{"samples": 64, "change": 0.1, "seconds": 1.0}], 0.001) is None
+    flat = [{"samples": n, "change": 0.05, "seconds": n / 100} for n in (64, 128, 256)]
+    assert project(flat, 0.001) is None
+
+
+def test_reference_converges_on_a_sphere_and_records_each_doubling(gl_ctx):
+    session = RenderSession(sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx)
+    method = session.method("reference")
+    method.values.update({"trace": False, "kd": 0.8, "fresnel": 0.2, "phong_exponent": 30.0})
+    method.values.update({"tolerance": 0.01, "samples": 4})
+    report = run_convergence(session, method, (32, 32), time_limit_s=120.0, progress=False)
+    assert report["converged"], report["checks"]
+    samples = [c["samples"] for c in report["checks"]]
+    assert samples == [16 * 2**k for k in range(len(samples))], "one check per doubling of batches"
+    assert report["checks"][-1]["change"] < 0.01 <= report["checks"][-2]["change"]
+    assert report["samples"] == samples[-1]
+    assert "converged: " in format_convergence(report)
+    session.release()
+
+
+def test_a_time_limit_stops_short_and_projects(gl_ctx):
+    session = RenderSession(sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx)
+    method = session.method("reference")
+    method.values.update({"trace": False, "tolerance": 1e-5, "samples": 4})
+    report = run_convergence(session, method, (32, 32), time_limit_s=3.0, progress=False)
+    assert not report["converged"]
+    assert report["projection"]["samples"] > report["samples"]
+    assert "NOT converged" in format_convergence(report)
+    session.release()
