@@ -1,0 +1,28 @@
+#!/bin/sh
+# The GPU numbers of issues #3 and #4, run on the GPU server from the checkout
+# root after prepare.sh (the device tool: carry .gl and .whl). Writes JSON and
+# text reports to $OUT (default ./gpu-results).
+set -eu
+out=${OUT:-gpu-results}
+mkdir -p "$out"
+for f in .gl/*.deb; do dpkg -x "$f" /; done
+ldconfig
+python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
+export PYTHONPATH="/tmp/site:$PWD/app"
+export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+es() { python3 -m envstudio "$@"; }
+# kautz static single pass against mirror (#4: <= 1.2x), 1080p, 100k triangles
+es bench --methods mirror,kautz --size 1920x1080 --triangles 100000 --json "$out/bench.json" \
+    | tee "$out/bench.txt"
+# kautz dynamic update of a 256² cube, per pass (#4: under 1 ms in all)
+for mips in false true; do
+    es bench --scene room --methods kautz --size 640x360 --param dynamic=true \
+        --param cross_face_filter=$mips --json "$out/dynamic_cross_$mips.json" \
+        | tee "$out/dynamic_cross_$mips.txt"
+done
+# time to a converged reference at 256² (#3)
+for scene in studio room; do
+    es bench --converge --scene "$scene" --size 256x256 --param max_samples=10000000 \
+        --time-limit "${CONVERGE_LIMIT:-200}" --json "$out/converge_$scene.json" \
+        | tee "$out/converge_$scene.txt"
+done
