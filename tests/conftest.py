@@ -15,6 +15,12 @@ def _strict_numpy():
         yield
 
 
+@pytest.fixture(autouse=True)
+def _private_cache(tmp_path, monkeypatch):
+    """Saved reference accumulations go to the test's own folder, never the user's cache."""
+    monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path / "cache"))
+
+
 @pytest.fixture
 def gl_ctx():
     """A fresh headless EGL context per test (llvmpipe on machines without a GPU)."""

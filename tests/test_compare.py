@@ -9,7 +9,7 @@ import pytest
 from envstudio.cli import main
 from envstudio.core.latlong import texel_directions
 from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
-from envstudio.io.images import write_image
+from envstudio.io.images import read_image, write_image
 from envstudio.methods.base import Method
 from envstudio.methods.parameters import Parameter
 from envstudio.methods.reference import ReferenceMethod
@@ -203,3 +203,37 @@ def test_a_method_far_from_an_unconverged_reference_is_still_reliable(
     noise = report["reference"]["relative_standard_error"]
     assert noise < 0.1 * mirror["median_relative_error"]
     assert mirror["reliable"] is True and report["reliable"] is True
+
+
+def test_a_second_compare_resumes_the_saved_reference(small_scene, tmp_path, capsys):
+    budget = ["--param", "tolerance=0.00001", "--methods", "mirror"]
+    assert compare(small_scene, tmp_path / "a", *budget, "--param", "max_samples=64") == 0
+    assert compare(small_scene, tmp_path / "b", *budget, "--param", "max_samples=128") == 0
+    first = json.loads((tmp_path / "a" / "compare.json").read_text())["reference"]
+    second = json.loads((tmp_path / "b" / "compare.json").read_text())["reference"]
+    assert (first["resumed_samples"], first["samples"]) == (0, 64)
+    assert (second["resumed_samples"], second["samples"]) == (64, 128)
+    assert second["frames"] == 128 // 8 - 64 // 8, "only the missing batches were rendered"
+    assert "resumed at 64 spp" in capsys.readouterr().err
+    args = ("--param", "max_samples=128", "--no-cache")
+    assert compare(small_scene, tmp_path / "c", *budget, *args) == 0
+    third = json.loads((tmp_path / "c" / "compare.json").read_text())["reference"]
+    assert third["resumed_samples"] == 0
+    # the same accumulation: a resumed reference equals one run straight through
+    resumed = read_image(tmp_path / "b" / "reference.exr")
+    straight = read_image(tmp_path / "c" / "reference.exr")
+    np.testing.assert_allclose(resumed, straight, rtol=1e-5, atol=1e-6)
+    assert second["rms_change"] == pytest.approx(third["rms_change"], rel=1e-4)
+
+
+def test_an_unreadable_saved_reference_is_one_warning_and_redone(small_scene, tmp_path, capsys):
+    args = ["--methods", "mirror", "--param", "max_samples=32", "--param", "tolerance=0.00001"]
+    assert compare(small_scene, tmp_path / "a", *args) == 0
+    (saved,) = (tmp_path / "cache" / "reference").glob("*.npz")
+    saved.write_bytes(b"not a numpy archive")
+    capsys.readouterr()
+    assert compare(small_scene, tmp_path / "b", *args) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "unreadable" in line]
+    assert len(warnings) == 1 and saved.name in warnings[0]
+    report = json.loads((tmp_path / "b" / "compare.json").read_text())["reference"]
+    assert report["resumed_samples"] == 0 and report["samples"] == 32

@@ -126,6 +126,13 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--frames", type=int, default=20, help="timed frames per method")
     compare.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
     compare.add_argument("--out", required=True, help="folder for the images, table and index.html")
+    compare.add_argument(
+        "--no-cache",
+        dest="cache",
+        action="store_false",
+        help="neither resume nor save the reference's accumulation "
+        "(default: kept in $ENVSTUDIO_CACHE_DIR or ~/.cache/envstudio)",
+    )
 
     fit = sub.add_parser(
         "fit-glossiness",

@@ -266,7 +266,14 @@ def run_compare(args: argparse.Namespace) -> int:
         if camera:
             session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
         comparison = run_comparison(
-            session, names, size, plan, args.frames, args.warmup, progress=sys.stderr.isatty()
+            session,
+            names,
+            size,
+            plan,
+            args.frames,
+            args.warmup,
+            progress=sys.stderr.isatty(),
+            cache=args.cache,
         )
     finally:
         session.release()

@@ -18,6 +18,7 @@
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER
 #include "common/random.glsl"
+#include "common/sobol.glsl"
 #include "common/fresnel.glsl"
 #include "reference/sampling.glsl"
 #include "reference/radiance.glsl"

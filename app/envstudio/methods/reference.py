@@ -196,6 +196,7 @@ class ReferenceMethod(Method):
         self._depth_fbo: moderngl.Framebuffer | None = None
         self._key: tuple | None = None
         self._snapshot: npt.NDArray[np.float64] | None = None
+        self._pending_state: dict[str, npt.NDArray] | None = None
         self._band_start = 0
         self._band_rows = 1
 
@@ -288,6 +289,9 @@ class ReferenceMethod(Method):
             self.status = ConvergenceStatus()
             self._snapshot = None
             self._band_start = 0
+            if self._pending_state is not None:
+                self._restore(self._pending_state, frame.size)
+                self._pending_state = None
 
     def _depth_prepass(self, frame: FrameInputs) -> None:
         """Nearest surface depth per pixel: only the visible reflector surface is shaded.
@@ -387,6 +391,55 @@ class ReferenceMethod(Method):
             self.status.checked_samples = self.status.samples
             self.status.converged = change < float(self.values["tolerance"])
         self._snapshot = current
+
+    # -- saving and resuming ----------------------------------------------------------------
+
+    def accumulation_state(self) -> dict[str, npt.NDArray]:
+        """The accumulation as arrays, for :meth:`resume` (render/reference_cache.py).
+
+        Keys: ``sum``, ``sum_sq`` ((h, w, 4) float32, row 0 at the top),
+        ``batches``, ``checked_samples`` (int64), ``rms_change`` (float64, NaN
+        before the first check) and ``snapshot`` ((h, w, 3) float64 estimate of
+        the last doubling, or an empty array).
+        """
+        total, squares = self._read()
+        change = self.status.rms_change
+        return {
+            "sum": total,
+            "sum_sq": squares,
+            "batches": np.int64(self.status.batches),
+            "checked_samples": np.int64(self.status.checked_samples),
+            "rms_change": np.float64(np.nan if change is None else change),
+            "snapshot": np.zeros(0) if self._snapshot is None else self._snapshot,
+        }
+
+    def resume(self, state: dict[str, npt.NDArray]) -> None:
+        """Continue from ``state`` at the next frame, as if its batches had been rendered.
+
+        The caller vouches that ``state`` was accumulated with the same scene,
+        view, size and parameters (render/reference_cache.py keys it so); a
+        state of another size is ignored. The sample sequence continues at the
+        saved batch count, so the resumed estimate equals an uninterrupted one.
+        """
+        self._pending_state = state
+        self._key = None
+
+    def _restore(self, state: dict[str, npt.NDArray], size: tuple[int, int]) -> None:
+        shape = (size[1], size[0], 4)
+        if state["sum"].shape != shape or state["sum_sq"].shape != shape:
+            return
+        for tex, name in ((self._sum, "sum"), (self._sum_sq, "sum_sq")):
+            tex.write(np.ascontiguousarray(state[name][::-1], np.float32).tobytes())
+        batches = int(state["batches"])
+        change = float(state["rms_change"])
+        self.status.batches = batches
+        self.status.samples = batches * int(self.values["samples"])
+        self.status.checked_samples = int(state["checked_samples"])
+        if not np.isnan(change):
+            self.status.rms_change = change
+            self.status.converged = change < float(self.values["tolerance"])
+        snapshot = state["snapshot"]
+        self._snapshot = snapshot.astype(np.float64) if snapshot.size else None
 
     # -- resources ---------------------------------------------------------------------------
 

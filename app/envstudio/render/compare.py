@@ -5,6 +5,9 @@ Steps, in one :class:`RenderSession` (one camera, one size, one display setting)
 1. The reference (methods/reference.py) accumulates until it converges or spends
    its sample budget (``max_samples``), with a progress bar. Its coverage is the
    reflector mask; an empty mask (the camera sees no reflector) is an error.
+   With the cache on (the CLI's default), the accumulation is saved as it
+   goes and a later run with the same inputs resumes it
+   (render/reference_cache.py).
 2. Each method renders the same frame (until :meth:`Method.finished`); its
    linear HDR frame and its display image are kept and measured against the
    reference's with core/metrics.py (PSNR, SSIM, FLIP on the display images
@@ -49,6 +52,7 @@ from envstudio.gpu.context import describe
 from envstudio.methods.base import Method, method_class
 from envstudio.methods.parameters import parse_assignments
 from envstudio.methods.reference import ConvergenceStatus, ReferenceMethod
+from envstudio.render import reference_cache
 from envstudio.render.bench import run_bench
 from envstudio.render.display import DISPLAY_PARAMETERS
 from envstudio.render.matching import match_glossiness
@@ -93,6 +97,9 @@ class ReferenceRun:
     relative_standard_error : float
         Median over the mask of the luminance standard error over the luminance
         of the estimate (channel errors added: an upper bound).
+    resumed_samples : int
+        Samples per pixel taken over from a saved accumulation (0 when it
+        started afresh; ``frames_ms`` and ``total_s`` count this run only).
     hdr : (h, w, 3) float32
         Linear radiance of the frame.
     display : (h, w, 3) float32
@@ -104,6 +111,7 @@ class ReferenceRun:
     frames_ms: list[float]
     total_s: float
     relative_standard_error: float
+    resumed_samples: int
     hdr: npt.NDArray[np.float32]
     display: npt.NDArray[np.float32]
 
@@ -269,6 +277,7 @@ def run_comparison(
     frames: int = 20,
     warmup: int = 3,
     progress: bool = False,
+    cache: bool = False,
 ) -> Comparison:
     """Render the reference and ``names`` at the session's camera and compare them.
 
@@ -286,6 +295,8 @@ def run_comparison(
         Timed and untimed frames per method.
     progress
         Show a progress bar on stderr while the reference converges.
+    cache
+        Resume the reference from, and save it to, render/reference_cache.py.
 
     Raises
     ------
@@ -296,7 +307,7 @@ def run_comparison(
         session.renderer.display[name] = value
     reference = session.method(ReferenceMethod.name)
     reference.values.update(plan.methods[ReferenceMethod.name])
-    ref_run, mask = _converge(session, reference, size, progress)
+    ref_run, mask = _converge(session, reference, size, progress, cache)
     frames_of: dict[str, tuple[Method, str | None, npt.NDArray, npt.NDArray]] = {}
     for name in names:
         if name == ReferenceMethod.name:
@@ -371,11 +382,23 @@ def _judge(
 
 
 def _converge(
-    session: RenderSession, reference: Method, size: tuple[int, int], progress: bool
+    session: RenderSession,
+    reference: ReferenceMethod,
+    size: tuple[int, int],
+    progress: bool,
+    cache: bool,
 ) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
-    """Accumulate until finished; the run and the mask. Raises on an empty mask."""
+    """Accumulate until finished (resumed and saved with ``cache``); the run and the mask.
+
+    Raises on an empty mask.
+    """
     budget = int(reference.values["max_samples"])
     frames_ms: list[float] = []
+    saved_at = time.perf_counter()
+    path = reference_cache.cache_path(session, reference, size) if cache else None
+    state = reference_cache.load_state(path) if path else None
+    if state is not None:
+        reference.resume(state)
     with tqdm(
         total=budget,
         desc="reference",
@@ -385,6 +408,7 @@ def _converge(
         bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
     ) as bar:
         frames_ms.append(_timed_frame(session, reference, size))
+        resumed = int(state["batches"]) * int(reference.values["samples"]) if state else 0
         if not reference.coverage().any():
             camera = session.camera
             raise ParameterError(
@@ -397,6 +421,13 @@ def _converge(
             if reference.finished():
                 break
             frames_ms.append(_timed_frame(session, reference, size))
+            if path and time.perf_counter() - saved_at > reference_cache.SAVE_INTERVAL_S:
+                reference_cache.save_state(path, reference.accumulation_state())
+                saved_at = time.perf_counter()
+    if path:
+        reference_cache.save_state(path, reference.accumulation_state())
+    if resumed:
+        print(f"reference: resumed at {resumed} spp from {path}", file=sys.stderr)
     print(f"reference: {reference.status_line()}", file=sys.stderr)
     mask = reference.coverage()
     estimate_y = reference.estimate()[mask] @ LUMINANCE
@@ -410,6 +441,7 @@ def _converge(
         relative_standard_error=float(np.median(error_y[lit] / estimate_y[lit]))
         if lit.any()
         else float("inf"),
+        resumed_samples=resumed,
         hdr=session.read_hdr(),
         display=_display_image(session, size),
     )

@@ -180,6 +180,7 @@ def to_json(comparison: Comparison) -> dict:
             "frames": len(ref.frames_ms),
             "total_s": ref.total_s,
             "relative_standard_error": _number(ref.relative_standard_error),
+            "resumed_samples": ref.resumed_samples,
             "files": {"exr": "reference.exr", "png": "reference.png"},
         },
         "methods": {

@@ -1,0 +1,87 @@
+"""Saved reference accumulations: ``compare`` resumes and reuses them.
+
+A converged reference can take hours on a software renderer. ``compare`` saves
+the accumulation (sums, squares, batch count, the last half-change and its
+snapshot) every :data:`SAVE_INTERVAL_S` seconds and at the end, atomically, to
+``<cache>/reference/<key>.npz``; a later run whose inputs give the same key
+continues from it: an interrupted run resumes, and comparing another method
+against the same reference costs nothing. The key is a SHA-256 of everything
+the estimate depends on: the environment's pixels, every node's geometry,
+transform, role and colour, the camera matrices, the image size, the
+reference's parameters except the stopping rules (``max_samples``,
+``tolerance``), and the text of the shaders that compute it. The cache folder
+is ``$ENVSTUDIO_CACHE_DIR``, else ``$XDG_CACHE_HOME/envstudio``, else
+``~/.cache/envstudio``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from envstudio.io.atomic import atomic_path
+from envstudio.methods.reference import ReferenceMethod
+from envstudio.render.session import RenderSession
+from envstudio.resources import shader_root
+
+SAVE_INTERVAL_S = 60.0
+STOPPING_RULES = ("max_samples", "tolerance")
+SHADER_FOLDERS = ("common", "reference")
+
+
+def cache_dir() -> Path:
+    """The folder holding envstudio's caches (not created here)."""
+    if os.environ.get("ENVSTUDIO_CACHE_DIR"):
+        return Path(os.environ["ENVSTUDIO_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "envstudio"
+
+
+def cache_path(session: RenderSession, reference: ReferenceMethod, size: tuple[int, int]) -> Path:
+    """Where the accumulation of ``reference`` for this session's view and ``size`` is kept."""
+    digest = hashlib.sha256()
+
+    def add(*arrays) -> None:
+        for array in arrays:
+            data = np.ascontiguousarray(array)
+            digest.update(str((data.dtype, data.shape)).encode())
+            digest.update(data.tobytes())
+
+    scene = session.scene
+    add(scene.environment.radiance)
+    for node in scene.nodes:
+        digest.update(node.role.encode())
+        add(node.mesh.positions, node.mesh.normals, node.mesh.indices)
+        add(node.transform.matrix(), np.asarray(node.color, np.float64))
+    camera = session.camera
+    add(camera.view_matrix(), camera.projection_matrix(size[0] / size[1]), np.asarray(size))
+    values = {k: v for k, v in reference.values.as_dict().items() if k not in STOPPING_RULES}
+    digest.update(repr(sorted(values.items())).encode())
+    for folder in SHADER_FOLDERS:
+        for path in sorted((shader_root() / folder).glob("*.glsl")):
+            digest.update(path.name.encode())
+            digest.update(path.read_bytes())
+    return cache_dir() / "reference" / f"{digest.hexdigest()[:32]}.npz"
+
+
+def load_state(path: Path) -> dict[str, np.ndarray] | None:
+    """The saved accumulation at ``path``; None when absent or unreadable (then it is redone)."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as data:
+            return {name: data[name] for name in data.files}
+    except (OSError, ValueError, EOFError) as error:
+        print(f"envstudio: warning: {path}: unreadable ({error}), starting over", file=sys.stderr)
+        return None
+
+
+def save_state(path: Path, state: dict[str, np.ndarray]) -> None:
+    """Write ``state`` to ``path`` atomically (a crash leaves the previous file)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        np.savez(handle, **state)
