@@ -46,6 +46,24 @@ vec2 sample2(uvec2 pixel, uint technique, uint i) {
     return stratified2(pixel, uint(u_frame), technique, i);
 }
 
+// Sample i's pixel-footprint offset, glossy-lobe sample (Phong or GGX) and
+// environment sample for the glossy term, drawn jointly from one 6D sequence
+// under `sobol`: a bright light whose reflection crosses the footprint is then
+// stratified in all three at once.
+vec2 g_footprint;
+vec2 g_lobe;
+vec2 g_environment;
+
+void draw_joint(uvec2 pixel, uint i) {
+    if (u_sequence == 1) {
+        sobol6(pixel, g_first_sample + i, g_footprint, g_lobe, g_environment);
+    } else {
+        g_footprint = stratified2(pixel, uint(u_frame), 6u, i);
+        g_lobe = stratified2(pixel, uint(u_frame), 2u, i);
+        g_environment = stratified2(pixel, uint(u_frame), 3u, i);
+    }
+}
+
 in vec3 v_world_position;
 in vec3 v_world_normal;
 layout(location = 0) out vec4 f_sum;
@@ -72,11 +90,11 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     float f = max(dot(n, directions[1]), 0.0) / PI;
     weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
     // Phong-lobe sample for P (pdf = lobe)
-    directions[2] = sample_phong(r, N, sample2(pixel, 2u, index));
+    directions[2] = sample_phong(r, N, g_lobe);
     pdf = phong_lobe(r, directions[2], N);
     weights[2] = pdf > 0.0 ? F * balance(pdf, env_pdf(directions[2])) : 0.0;
     // environment sample for P
-    directions[3] = sample_environment(sample2(pixel, 3u, index));
+    directions[3] = sample_environment(g_environment);
     pdf = env_pdf(directions[3]);
     f = phong_lobe(r, directions[3], N);
     weights[3] = f > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
@@ -94,7 +112,7 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     float F_view = schlick_fresnel(u_fresnel, n_dot_v);
     vec3 result = vec3(0.0);
     for (int technique = 0; technique < 2; ++technique) {
-        vec2 xi = sample2(pixel, 4u + uint(technique), index);
+        vec2 xi = technique == 0 ? g_lobe : g_environment;
         vec3 l;
         if (technique == 0) {
             vec3 h = sample_ggx_half(n, alpha, xi);
@@ -133,8 +151,8 @@ void main() {
         // With the pixel filter each sample sees another point of the pixel's
         // footprint (box filter, stratified): the anti-aliased image that
         // mip-mapped lookups approximate. Without it, the pixel centre only.
-        vec2 offset = u_pixel_filter ? sample2(pixel, 6u, uint(i)) - 0.5
-                                     : vec2(0.0);
+        draw_joint(pixel, uint(i));
+        vec2 offset = u_pixel_filter ? g_footprint - 0.5 : vec2(0.0);
         vec3 p = interpolateAtOffset(v_world_position, offset);
         vec3 n = normalize(interpolateAtOffset(v_world_normal, offset));
         vec3 v = normalize(u_camera_position - p);
