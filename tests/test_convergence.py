@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from envstudio.render.convergence import format_convergence, project, run_convergence
+from envstudio.methods.reference import project_convergence
+from envstudio.render.convergence import format_convergence, run_convergence
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_reference_gl import smooth_environment
@@ -16,16 +17,16 @@ def test_projection_recovers_a_power_law():
         {"samples": n, "change": 0.5 / np.sqrt(n), "seconds": 0.002 * n}
         for n in (64, 128, 256, 512, 1024)
     ]
-    projection = project(checks, 0.001)
+    projection = project_convergence(checks, 0.001)
     assert projection["slope"] == pytest.approx(-0.5, abs=1e-9)
     assert projection["samples"] == pytest.approx(250_000, rel=1e-6)
     assert projection["seconds"] == pytest.approx(500, rel=1e-6)
 
 
 def test_no_projection_from_one_check_or_a_flat_change():
-    assert project([{"samples": 64, "change": 0.1, "seconds": 1.0}], 0.001) is None
+    assert project_convergence([{"samples": 64, "change": 0.1, "seconds": 1.0}], 0.001) is None
     flat = [{"samples": n, "change": 0.05, "seconds": n / 100} for n in (64, 128, 256)]
-    assert project(flat, 0.001) is None
+    assert project_convergence(flat, 0.001) is None
 
 
 def test_reference_converges_on_a_sphere_and_records_each_doubling(gl_ctx):
@@ -50,5 +51,8 @@ def test_a_time_limit_stops_short_and_projects(gl_ctx):
     report = run_convergence(session, method, (32, 32), time_limit_s=3.0, progress=False)
     assert not report["converged"]
     assert report["projection"]["samples"] > report["samples"]
+    assert report["projection"]["seconds"] > report["checks"][-1]["seconds"]
     assert "NOT converged" in format_convergence(report)
+    # the viewer's and the CLI's status line says how long is left
+    assert method.status_line().endswith(" to go"), method.status_line()
     session.release()

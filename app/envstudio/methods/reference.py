@@ -24,8 +24,9 @@ radiance.glsl, resolve.glsl.
 
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import moderngl
 import numpy as np
@@ -40,6 +41,8 @@ from envstudio.methods.tracing import TraceData
 
 MODELS = ("phong", "microfacet")
 SEQUENCES = ("random", "sobol")
+FIT_CHECKS = 4
+FLATTEST_SLOPE = -0.1
 
 
 @dataclass
@@ -58,6 +61,11 @@ class ConvergenceStatus:
         ``samples`` at that doubling (0 before it).
     converged : bool
         ``rms_change`` is below the tolerance.
+    checks : list of dict
+        Every doubling since the restart: ``samples``, ``change`` and
+        ``seconds`` (wall time since ``started``).
+    started : float
+        ``time.perf_counter()`` at the restart.
     """
 
     batches: int = 0
@@ -65,6 +73,8 @@ class ConvergenceStatus:
     rms_change: float | None = None
     checked_samples: int = 0
     converged: bool = False
+    checks: list[dict] = field(default_factory=list)
+    started: float = field(default_factory=time.perf_counter)
 
     def describe(self) -> str:
         """One line for the UI and the CLI."""
@@ -205,10 +215,16 @@ class ReferenceMethod(Method):
         return self.status.converged or self.status.samples >= int(self.values["max_samples"])
 
     def status_line(self) -> str:
-        """Samples per pixel, the last successive-half change and the state."""
+        """Samples per pixel, the last half-change, the state and the projected time left."""
         line = self.status.describe()
-        if not self.status.converged and self.status.samples >= int(self.values["max_samples"]):
-            line += " (budget spent: NOT converged)"
+        if self.status.converged:
+            return line
+        if self.status.samples >= int(self.values["max_samples"]):
+            return line + " (budget spent: NOT converged)"
+        projection = project_convergence(self.status.checks, float(self.values["tolerance"]))
+        if projection is not None:
+            elapsed = time.perf_counter() - self.status.started
+            line += f", ≈ {_duration(projection['seconds'] - elapsed)} to go"
         return line
 
     # -- rendering ---------------------------------------------------------------------------
@@ -389,6 +405,13 @@ class ReferenceMethod(Method):
             change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else float("inf")
             self.status.rms_change = change
             self.status.checked_samples = self.status.samples
+            self.status.checks.append(
+                {
+                    "samples": self.status.samples,
+                    "change": change,
+                    "seconds": time.perf_counter() - self.status.started,
+                }
+            )
             self.status.converged = change < float(self.values["tolerance"])
         self._snapshot = current
 
@@ -469,3 +492,51 @@ class ReferenceMethod(Method):
             self._trace.release()
             self._trace = None
         self._key = self._trace_key = None
+
+
+def project_convergence(checks: list[dict], tolerance: float) -> dict | None:
+    """Samples and seconds to reach ``tolerance``, extrapolated from the last checks.
+
+    Fits log(change) = a + s log(samples) by least squares over the last
+    :data:`FIT_CHECKS` checks (s = −1/2 for plain Monte Carlo, steeper for the
+    Sobol sequence on smooth integrands), and the time per sample over the same span.
+
+    Parameters
+    ----------
+    checks : list of dict
+        ``samples``, ``change`` and ``seconds`` at successive doublings
+        (:attr:`ConvergenceStatus.checks`).
+    tolerance : float
+        The relative half-change to reach.
+
+    Returns
+    -------
+    dict or None
+        ``slope`` s, ``samples`` and ``seconds`` (since the start) at which
+        the fitted change reaches the tolerance; None with fewer than two
+        checks or a slope flatter than :data:`FLATTEST_SLOPE`.
+    """
+    tail = checks[-FIT_CHECKS:]
+    if len(tail) < 2:
+        return None
+    log_n = np.log([c["samples"] for c in tail])
+    log_change = np.log([c["change"] for c in tail])
+    slope, intercept = np.polyfit(log_n, log_change, 1)
+    if slope > FLATTEST_SLOPE:
+        return None
+    samples = math.exp((math.log(tolerance) - intercept) / slope)
+    span = tail[-1]["samples"] - tail[0]["samples"]
+    per_sample = (tail[-1]["seconds"] - tail[0]["seconds"]) / span
+    return {
+        "slope": float(slope),
+        "samples": samples,
+        "seconds": tail[-1]["seconds"] + (samples - tail[-1]["samples"]) * per_sample,
+    }
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{max(seconds, 0):.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.3g} h"

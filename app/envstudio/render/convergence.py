@@ -1,28 +1,23 @@
 """``envstudio bench --converge``: time for the reference to reach its tolerance.
 
 The reference checks the successive-half change at every doubling of its batch
-count (methods/reference.py); this records each check with the wall time since
-the first frame, stops at convergence, at the sample budget or at a time limit,
-and, where it stopped short, projects the samples and time the tolerance would
-take from the slope of log(change) against log(samples) over the last checks
-(-1/2 for plain Monte Carlo, steeper for the Sobol sequence).
+count and records each check with its wall time (methods/reference.py); this
+renders it until it converges, spends its sample budget or reaches a time
+limit, and, where it stopped short, reports the samples and time the tolerance
+would take, projected from the slope of log(change) against log(samples) over
+the last checks (:func:`~envstudio.methods.reference.project_convergence`).
 """
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 
-import numpy as np
 from tqdm import tqdm
 
 from envstudio.gpu.context import describe
-from envstudio.methods.reference import ReferenceMethod
+from envstudio.methods.reference import ReferenceMethod, project_convergence
 from envstudio.render.session import RenderSession
-
-FIT_CHECKS = 4
-FLATTEST_SLOPE = -0.1
 
 
 def run_convergence(
@@ -56,7 +51,6 @@ def run_convergence(
         stopped short with at least two checks.
     """
     tolerance = float(method.values["tolerance"])
-    checks: list[dict] = []
     session.ctx.finish()
     start = time.perf_counter()
     with tqdm(
@@ -71,16 +65,10 @@ def run_convergence(
             session.ctx.finish()
             elapsed = time.perf_counter() - start
             bar.update(1)
-            status = method.status
-            if status.checked_samples and (
-                not checks or checks[-1]["samples"] != status.checked_samples
-            ):
-                checks.append(
-                    {"samples": status.samples, "change": status.rms_change, "seconds": elapsed}
-                )
-                bar.set_postfix_str(method.status_line())
+            bar.set_postfix_str(method.status_line())
             if method.finished() or elapsed >= time_limit_s:
                 break
+    checks = method.status.checks
     report = {
         "device": describe(session.ctx),
         "size": list(size),
@@ -92,35 +80,8 @@ def run_convergence(
         "seconds": elapsed,
     }
     if not method.status.converged:
-        report["projection"] = project(checks, tolerance)
+        report["projection"] = project_convergence(checks, tolerance)
     return report
-
-
-def project(checks: list[dict], tolerance: float) -> dict | None:
-    """Samples and seconds to reach ``tolerance``, extrapolated from the last checks.
-
-    Fits log(change) = a + s log(samples) by least squares over the last
-    :data:`FIT_CHECKS` checks, and the time per sample over the same span.
-
-    Returns
-    -------
-    dict or None
-        ``slope`` s, ``samples`` and ``seconds`` at which the fitted change
-        reaches the tolerance; None with fewer than two checks or a slope
-        flatter than :data:`FLATTEST_SLOPE` (no meaningful projection).
-    """
-    tail = checks[-FIT_CHECKS:]
-    if len(tail) < 2:
-        return None
-    log_n = np.log([c["samples"] for c in tail])
-    log_change = np.log([c["change"] for c in tail])
-    slope, intercept = np.polyfit(log_n, log_change, 1)
-    if slope > FLATTEST_SLOPE:
-        return None
-    samples = math.exp((math.log(tolerance) - intercept) / slope)
-    span = tail[-1]["samples"] - tail[0]["samples"]
-    per_sample = (tail[-1]["seconds"] - tail[0]["seconds"]) / span
-    return {"slope": float(slope), "samples": samples, "seconds": samples * per_sample}
 
 
 def format_convergence(report: dict) -> str:
