@@ -169,3 +169,24 @@ def test_microfacet_model_matches_brute_force_within_the_reported_confidence(gl_
     assert abs(np.mean(est / expected) - 1) < 0.01, np.mean(est / expected)
     assert np.mean(np.abs(est - expected) < 4 * se) > 0.98
     session.release()
+
+
+def test_bands_within_a_frame_budget_add_up_to_the_same_batches(gl_ctx):
+    """The viewer's banded accumulation covers every row once per batch, as one whole pass does."""
+    img = smooth_environment()
+    results = []
+    for budget in (None, 1.0):
+        session = RenderSession(sphere_scene(Environment(img), rings=64), ctx=gl_ctx)
+        method = session.method("reference")
+        method.values.update({"trace": False, "samples": 4})
+        method.frame_budget_ms = budget
+        frames = 0
+        while method.status.batches < 2:
+            session.render_offscreen(method, SIZE)
+            frames += 1
+        results.append((frames, method.estimate()))
+        session.release()
+    (whole_frames, whole), (banded_frames, banded) = results
+    assert whole_frames == 2
+    assert banded_frames > 2 * 3, "a 1 ms budget should split each batch into several bands"
+    np.testing.assert_allclose(banded, whole, rtol=1e-5, atol=1e-6)

@@ -208,7 +208,8 @@ class ReferenceMethod(Method):
         self._snapshot: npt.NDArray[np.float64] | None = None
         self._pending_state: dict[str, npt.NDArray] | None = None
         self._band_start = 0
-        self._band_rows = 1
+        self._row_pixels: npt.NDArray[np.int64] | None = None
+        self._pixel_cost_s: float | None = None
 
     def finished(self) -> bool:
         """Converged, or the sample budget is spent."""
@@ -248,21 +249,27 @@ class ReferenceMethod(Method):
         In the window a batch over the whole image can take seconds on a
         software renderer; the image is then processed in horizontal bands,
         as many per frame as fit the budget, so the UI stays responsive. A
-        batch is complete when the bands have covered every row.
+        batch is complete when the bands have covered every row. The cost of a
+        band is predicted from the reflector pixels in its rows (counted in the
+        depth prepass) times the last measured cost per pixel, so rows of
+        background cost nothing and a band never grows past the reflector's
+        edge into seconds of work.
         """
         height = frame.size[1]
         start = time.perf_counter()
         while True:
             if self._band_start == 0:
                 self._depth_prepass(frame)
-            rows = height if self.frame_budget_ms is None else min(self._band_rows, height)
-            rows = min(rows, height - self._band_start)
+            rows = height - self._band_start
+            if self.frame_budget_ms is not None:
+                rows = self._rows_within(0.5e-3 * self.frame_budget_ms)
             band_start = time.perf_counter()
             self._accumulate_band(frame, self._band_start, rows)
             if self.frame_budget_ms is not None:
                 self.ctx.finish()
-                per_row = (time.perf_counter() - band_start) / rows
-                self._band_rows = max(1, int(0.5 * self.frame_budget_ms / 1e3 / max(per_row, 1e-9)))
+                pixels = int(self._row_pixels[self._band_start : self._band_start + rows].sum())
+                if pixels > 0:
+                    self._pixel_cost_s = (time.perf_counter() - band_start) / pixels
             self._band_start += rows
             if self._band_start >= height:
                 self._band_start = 0
@@ -271,6 +278,14 @@ class ReferenceMethod(Method):
                     return
             if (time.perf_counter() - start) * 1e3 >= self.frame_budget_ms:
                 return
+
+    def _rows_within(self, seconds: float) -> int:
+        """Rows from the current band start whose predicted cost fits ``seconds`` (at least 1)."""
+        counts = self._row_pixels[self._band_start :]
+        if self._pixel_cost_s is None:  # nothing measured yet: one row, or up to the first pixels
+            return max(1, int(np.argmax(counts > 0))) if counts.any() else len(counts)
+        cost = np.cumsum(counts) * self._pixel_cost_s
+        return max(1, int(np.searchsorted(cost, seconds, side="right")))
 
     def _finish_batch(self) -> None:
         self.status.batches += 1
@@ -326,6 +341,12 @@ class ReferenceMethod(Method):
             set_uniform(program, "u_model", gpu_node.model)
             set_uniform(program, "u_normal_matrix", gpu_node.normal)
             gpu_node.mesh.render(program)
+        if self.frame_budget_ms is not None:
+            w, h = frame.size
+            depth = np.frombuffer(
+                self._depth_fbo.read(components=1, attachment=-1, dtype="f4"), np.float32
+            )
+            self._row_pixels = np.count_nonzero(depth.reshape(h, w) < 1.0, axis=1)
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
