@@ -344,15 +344,17 @@ class Viewer(WindowConfig):
         return [f"settings: {problem}" for problem in problems]
 
     def method(self, name: str) -> Method:
-        """The session's method ``name``, with its saved parameter values on first use."""
+        """The session's method ``name``: saved parameter values on first use, the frame budget."""
         if name not in self._restored_methods:
             problems = self._restore_method(name)
             for problem in problems:
                 print(f"envstudio: warning: {problem}", file=sys.stderr)
             if problems:
                 self.status.error("\n".join(problems))
-            self.session.method(name).frame_budget_ms = PROGRESSIVE_BUDGET_MS
-        return self.session.method(name)
+        method = self.session.method(name)
+        # progressive methods work within the budget, whichever way they were first reached
+        method.frame_budget_ms = PROGRESSIVE_BUDGET_MS
+        return method
 
     def _restore_method(self, name: str) -> list[str]:
         """Give method ``name`` its saved parameter values; returns what was rejected."""
