@@ -1,8 +1,10 @@
 #!/bin/sh
 # The GPU numbers of issues #3 and #4, run on the GPU server from the checkout
 # root after prepare.sh (the device tool: carry .gl and .whl). Writes JSON and
-# text reports to $OUT (default ./gpu-results).
+# text reports to $OUT (default ./gpu-results). Usage: measure.sh [timings|converge|all]
+# (one device call is limited to 10 minutes: run `timings` and `converge` apart).
 set -eu
+part=${1:-all}
 out=${OUT:-gpu-results}
 mkdir -p "$out"
 for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -11,6 +13,7 @@ python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .
 export PYTHONPATH="/tmp/site:$PWD/app"
 export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
 es() { python3 -m envstudio "$@"; }
+if [ "$part" = timings ] || [ "$part" = all ]; then
 # kautz static single pass against mirror (#4: <= 1.2x), 1080p, 100k triangles
 es bench --methods mirror,kautz --size 1920x1080 --triangles 100000 --json "$out/bench.json" \
     | tee "$out/bench.txt"
@@ -20,9 +23,12 @@ for mips in false true; do
         --param cross_face_filter=$mips --json "$out/dynamic_cross_$mips.json" \
         | tee "$out/dynamic_cross_$mips.txt"
 done
+fi
+if [ "$part" = converge ] || [ "$part" = all ]; then
 # time to a converged reference at 256² (#3)
 for scene in studio room; do
     es bench --converge --scene "$scene" --size 256x256 --param max_samples=10000000 \
         --time-limit "${CONVERGE_LIMIT:-200}" --json "$out/converge_$scene.json" \
         | tee "$out/converge_$scene.txt"
 done
+fi
