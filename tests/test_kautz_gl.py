@@ -19,17 +19,14 @@ from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Transform
 from envstudio.scene.primitives import box
+from test_render_gl import render as render_frame
 from test_render_gl import sphere_geometry, sphere_scene
 
 SIZE = (96, 96)
 
 
 def render(session: RenderSession, method: str = "kautz", **params) -> np.ndarray:
-    m = session.method(method)
-    m.values.update(params)
-    session.renderer.display["background"] = False
-    session.render_offscreen(m, SIZE)
-    return session.read_hdr()
+    return render_frame(session, method, SIZE, **params)
 
 
 def sun_and_sky(height: int = 64) -> Environment:

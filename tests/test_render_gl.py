@@ -40,11 +40,14 @@ def sphere_scene(
     return Scene(environment, [Node("sphere", uv_sphere(1.0, rings, 2 * rings))], camera, "sphere")
 
 
-def render(session: RenderSession, method: str = "mirror", **params) -> np.ndarray:
+def render(
+    session: RenderSession, method: str = "mirror", size: tuple[int, int] = SIZE, **params
+) -> np.ndarray:
+    """``method`` with ``params`` over no background: the (h, w, 3) linear frame."""
     m = session.method(method)
     m.values.update(params)
     session.renderer.display["background"] = False
-    session.render_offscreen(m, SIZE)
+    session.render_offscreen(m, size)
     return session.read_hdr()
 
 
