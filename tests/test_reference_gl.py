@@ -175,7 +175,8 @@ def test_bands_within_a_frame_budget_add_up_to_the_same_batches(gl_ctx):
     """The viewer's banded accumulation covers every row once per batch, as one whole pass does."""
     img = smooth_environment()
     results = []
-    for budget in (None, 1.0):
+    # a budget no band can meet: one band per frame on any hardware
+    for budget in (None, 1e-6):
         session = RenderSession(sphere_scene(Environment(img), rings=64), ctx=gl_ctx)
         method = session.method("reference")
         method.values.update({"trace": False, "samples": 4})
@@ -188,5 +189,5 @@ def test_bands_within_a_frame_budget_add_up_to_the_same_batches(gl_ctx):
         session.release()
     (whole_frames, whole), (banded_frames, banded) = results
     assert whole_frames == 2
-    assert banded_frames > 2 * 3, "a 1 ms budget should split each batch into several bands"
+    assert banded_frames > 2 * 3, "each batch should be split into several bands"
     np.testing.assert_allclose(banded, whole, rtol=1e-5, atol=1e-6)
