@@ -42,26 +42,38 @@ float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
     return t;
 }
 
+// Entry distance of the ray into node's box, or -1 where it misses or enters
+// beyond t_max.
+float trace_box_entry(int node, vec3 o, vec3 inv, float t_max) {
+    vec3 t0 = (trace_fetch(u_bvh_nodes, 2 * node).xyz - o) * inv;
+    vec3 t1 = (trace_fetch(u_bvh_nodes, 2 * node + 1).xyz - o) * inv;
+    vec3 tmin = min(t0, t1);
+    vec3 tmax = max(t0, t1);
+    float near = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+    float far = min(min(tmax.x, tmax.y), min(tmax.z, t_max));
+    return far < near ? -1.0 : near;
+}
+
+// Closest hit, children visited near first: both child boxes are tested at
+// their parent and pushed with their entry distances, and an entry beyond the
+// closest hit so far is skipped when popped.
 bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 bary) {
     vec3 inv = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
     int stack[TRACE_STACK];
+    float entry[TRACE_STACK];
     int top = 0;
-    stack[top++] = 0;
     t_hit = 1e30;
     tri_hit = -1;
+    if (trace_box_entry(0, o, inv, t_hit) >= 0.0) {
+        stack[top] = 0;
+        entry[top++] = 0.0;
+    }
     while (top > 0) {
-        int node = stack[--top];
-        vec4 a = trace_fetch(u_bvh_nodes, 2 * node);
-        vec4 b = trace_fetch(u_bvh_nodes, 2 * node + 1);
-        vec3 t0 = (a.xyz - o) * inv;
-        vec3 t1 = (b.xyz - o) * inv;
-        vec3 tmin = min(t0, t1);
-        vec3 tmax = max(t0, t1);
-        float near = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
-        float far = min(min(tmax.x, tmax.y), min(tmax.z, t_hit));
-        if (far < near) continue;
-        int link = int(a.w);
-        int count = int(b.w);
+        --top;
+        if (entry[top] > t_hit) continue;
+        int node = stack[top];
+        int link = int(trace_fetch(u_bvh_nodes, 2 * node).w);
+        int count = int(trace_fetch(u_bvh_nodes, 2 * node + 1).w);
         if (count > 0) {
             for (int k = link; k < link + count; ++k) {
                 vec2 uv;
@@ -74,9 +86,22 @@ bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 ba
                     bary = uv;
                 }
             }
-        } else if (top + 2 <= TRACE_STACK) {
-            stack[top++] = link;
-            stack[top++] = node + 1;
+            continue;
+        }
+        float t_left = trace_box_entry(node + 1, o, inv, t_hit);
+        float t_right = trace_box_entry(link, o, inv, t_hit);
+        bool left_first = t_right < 0.0 || (t_left >= 0.0 && t_left <= t_right);
+        int near_node = left_first ? node + 1 : link;
+        int far_node = left_first ? link : node + 1;
+        float t_near = left_first ? t_left : t_right;
+        float t_far = left_first ? t_right : t_left;
+        if (t_far >= 0.0 && top < TRACE_STACK) {
+            stack[top] = far_node;
+            entry[top++] = t_far;
+        }
+        if (t_near >= 0.0 && top < TRACE_STACK) {
+            stack[top] = near_node;
+            entry[top++] = t_near;
         }
     }
     return tri_hit >= 0;
