@@ -53,10 +53,10 @@ def bright_patch():
     return img
 
 
-def analytic_patch_lobe(reflections, exponent, sub=64):
+def analytic_patch_lobe(reflections, exponent, patch=PATCH, sub=64):
     """(N+1)/2pi ∫_patch (r.l)^N L dl, integrated over each texel's area by a fine midpoint rule."""
-    h = PATCH["height"]
-    (r0, r1), (c0, c1) = PATCH["rows"], PATCH["cols"]
+    h = patch["height"]
+    (r0, r1), (c0, c1) = patch["rows"], patch["cols"]
     v = (r0 + (np.arange((r1 - r0) * sub) + 0.5) / sub) / h
     u = (c0 + (np.arange((c1 - c0) * sub) + 0.5) / sub) / (2 * h)
     uu, vv = np.meshgrid(u, v)
@@ -64,7 +64,7 @@ def analytic_patch_lobe(reflections, exponent, sub=64):
     # dω = 2π² sin θ du dv (lat-long convention)
     d_omega = 2 * np.pi**2 * np.sin(np.pi * vv.ravel()) / (sub * h) / (sub * 2 * h)
     cos = np.maximum(reflections.reshape(-1, 3) @ dirs.T, 0.0)
-    lobe = (exponent + 1) / (2 * np.pi) * cos**exponent @ d_omega * PATCH["radiance"]
+    lobe = (exponent + 1) / (2 * np.pi) * cos**exponent @ d_omega * patch["radiance"]
     return lobe.reshape(reflections.shape[:-1])
 
 
@@ -85,6 +85,59 @@ def test_phong_lobe_of_a_small_bright_patch_matches_the_analytic_lobe(gl_ctx, ex
     assert np.all(np.abs(est[lit] - expected[lit]) < 4.5 * se[lit]), "outside the reported CI"
     assert np.median(se[lit] / est[lit]) < 0.02
     session.release()
+
+
+# Four lamps on a black 64 x 128 map: one across the u = 0 seam (+Z, what the
+# sphere's centre reflects), one beside it, a ring around the +Y pole, and the
+# brightest behind the sphere, where no reflection sees it.
+LAMPS = [
+    {"height": 64, "rows": (29, 33), "cols": (126, 130), "radiance": 50.0},
+    {"height": 64, "rows": (20, 23), "cols": (108, 111), "radiance": 200.0},
+    {"height": 64, "rows": (1, 3), "cols": (0, 128), "radiance": 20.0},
+    {"height": 64, "rows": (30, 33), "cols": (60, 63), "radiance": 4000.0},
+]
+
+
+def lamps_environment():
+    img = np.zeros((64, 128, 3), np.float32)
+    for lamp in LAMPS:
+        (r0, r1), (c0, c1) = lamp["rows"], lamp["cols"]
+        img[r0:r1, np.arange(c0, c1) % 128] = lamp["radiance"]
+    return img
+
+
+def test_environment_sampling_inside_the_lobe_is_unbiased_and_cuts_the_variance(gl_ctx):
+    variances = {}
+    for sampling in ("global", "lobe"):
+        session = RenderSession(
+            sphere_scene(Environment(lamps_environment()), rings=256), ctx=gl_ctx
+        )
+        method, inside, normal, view = converge(
+            session,
+            16,
+            kd=0.0,
+            fresnel=1.0,
+            phong_exponent=100.0,
+            samples=16,
+            environment_sampling=sampling,
+        )
+        r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
+        expected = sum(
+            analytic_patch_lobe(r, 100.0, {**lamp, "cols": (c0, c1)}, sub=8)
+            for lamp in LAMPS
+            for c0, c1 in [(lamp["cols"][0], min(lamp["cols"][1], 128)), (128, lamp["cols"][1])]
+            if c1 > c0
+        )
+        est, se = method.estimate()[..., 0], method.standard_error()[..., 0]
+        lit = inside & (expected > 0.05 * expected[inside].max())
+        assert lit.sum() >= 40, "too few pixels see the lamps"
+        ratio = est[lit] / expected[lit]
+        assert abs(ratio.mean() - 1) < 0.01, f"{sampling}: mean ratio {ratio.mean():.4f}"
+        z = (est[lit] - expected[lit]) / se[lit]
+        assert np.mean(np.abs(z) < 4) > 0.99, f"{sampling}: outside the reported CI"
+        variances[sampling] = np.mean(se[lit] ** 2)
+        session.release()
+    assert variances["global"] > 10 * variances["lobe"], variances
 
 
 def smooth_environment(height=32):

@@ -32,6 +32,9 @@ uniform int u_samples;
 uniform int u_frame;
 
 uniform int u_sequence;
+uniform int u_environment_sampling;  // 0: the whole map; 1: restricted to the Phong lobe's cap
+
+const float LOBE_CAP_FLOOR = 1e-3;
 
 // Number of this batch's first sample in the pixel's sequence (set by main).
 uint g_first_sample;
@@ -89,15 +92,20 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     pdf = env_pdf(directions[1]);
     float f = max(dot(n, directions[1]), 0.0) / PI;
     weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
-    // Phong-lobe sample for P (pdf = lobe)
+    // Phong-lobe sample for P (pdf = lobe; its weight below)
     directions[2] = sample_phong(r, N, g_lobe);
-    pdf = phong_lobe(r, directions[2], N);
-    weights[2] = pdf > 0.0 ? F * balance(pdf, env_pdf(directions[2])) : 0.0;
-    // environment sample for P
-    directions[3] = sample_environment(g_environment);
-    pdf = env_pdf(directions[3]);
+    // environment sample for P: from the part of the map inside the lobe's cap
+    // (where the lobe is above LOBE_CAP_FLOOR of its peak) when it fits the
+    // tables' CONE_MAX_ROWS, else from the whole map; either is paired with the
+    // lobe sample by the balance heuristic, so the lobe outside the cap stays covered.
+    bool cone = u_environment_sampling == 1 && setup_cone(r, pow(LOBE_CAP_FLOOR, 1.0 / N));
+    directions[3] = cone ? sample_cone(g_environment) : sample_environment(g_environment);
+    pdf = cone ? cone_pdf(directions[3]) : env_pdf(directions[3]);
     f = phong_lobe(r, directions[3], N);
-    weights[3] = f > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
+    weights[3] = f > 0.0 && pdf > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
+    float lobe_pdf = phong_lobe(r, directions[2], N);
+    float other = cone ? cone_pdf(directions[2]) : env_pdf(directions[2]);
+    weights[2] = lobe_pdf > 0.0 ? F * balance(lobe_pdf, other) : 0.0;
     vec3 total = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
         if (weights[k] > 0.0) total += weights[k] * incident(p, n, directions[k]);

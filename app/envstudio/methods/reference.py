@@ -41,6 +41,7 @@ from envstudio.methods.tracing import TraceData
 
 MODELS = ("phong", "microfacet")
 SEQUENCES = ("random", "sobol")
+ENVIRONMENT_SAMPLING = ("global", "lobe")
 FIT_CHECKS = 4
 FLATTEST_SLOPE = -0.1
 
@@ -167,6 +168,14 @@ class ReferenceMethod(Method):
             choices=SEQUENCES,
             help="sobol: one scrambled Sobol sequence per pixel (faster convergence; the "
             "standard error shown is then an upper bound); random: independent batches.",
+        ),
+        Parameter(
+            "environment_sampling",
+            "choice",
+            "lobe",
+            choices=ENVIRONMENT_SAMPLING,
+            help="lobe: draw the Phong term's environment samples by luminance inside the "
+            "lobe's cap (small lamps converge far faster); global: from the whole map.",
         ),
         Parameter(
             "samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."
@@ -365,6 +374,11 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_samples", int(self.values["samples"]))
         set_uniform(program, "u_sequence", SEQUENCES.index(self.values["sequence"]))
         set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
+        set_uniform(
+            program,
+            "u_environment_sampling",
+            ENVIRONMENT_SAMPLING.index(self.values["environment_sampling"]),
+        )
         set_uniform(program, "u_frame", self.status.batches)
         self._fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
