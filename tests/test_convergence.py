@@ -58,3 +58,29 @@ def test_a_time_limit_stops_short_and_projects(gl_ctx):
     # the viewer's and the CLI's status line says how long is left
     assert method.status_line().endswith(" to go"), method.status_line()
     session.release()
+
+
+def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx):
+    def run(max_samples: int, resume: bool):
+        session = RenderSession(
+            sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx
+        )
+        method = session.method("reference")
+        method.values.update({"trace": False, "tolerance": 1e-5, "samples": 4})
+        method.values["max_samples"] = max_samples
+        report = run_convergence(session, method, (32, 32), 120.0, progress=False, resume=resume)
+        estimate = method.estimate()
+        session.release()
+        return report, estimate
+
+    first, _ = run(64, resume=True)
+    resumed, estimate = run(256, resume=True)
+    whole, expected = run(256, resume=False)
+    assert first["resumed_samples"] == 0 and resumed["resumed_samples"] == 64
+    # the doublings of the first run are kept, with their times, and the sequence continues
+    assert resumed["checks"][: len(first["checks"])] == first["checks"]
+    assert [c["samples"] for c in resumed["checks"]] == [c["samples"] for c in whole["checks"]]
+    assert resumed["checks"][-1]["change"] == pytest.approx(whole["checks"][-1]["change"], rel=1e-4)
+    assert resumed["seconds"] >= first["seconds"] + resumed["run_seconds"] * 0.99
+    np.testing.assert_allclose(estimate, expected, rtol=1e-5, atol=1e-6)
+    assert "resumed at 64 spp" in format_convergence(resumed)

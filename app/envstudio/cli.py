@@ -105,6 +105,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=3600.0,
         help="with --converge: stop after this many seconds and project the rest",
     )
+    bench.add_argument(
+        "--resume",
+        action="store_true",
+        help="with --converge: continue the saved accumulation of an earlier run of the same "
+        "inputs and save this one every minute (seconds then count all the runs)",
+    )
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
 

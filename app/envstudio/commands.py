@@ -184,6 +184,8 @@ def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
 
     if args.methods not in (None, "reference"):
         raise ParameterError(f"--converge --methods {args.methods}: only 'reference' converges")
+    if args.resume and not args.converge:
+        raise ParameterError("--resume: only with --converge")
     if not args.time_limit > 0:
         raise ParameterError(f"--time-limit {args.time_limit}: expected a positive number")
     json_out = check_output_path(args.json_out) if args.json_out else None
@@ -192,7 +194,12 @@ def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
         method = session.method("reference")
         apply_params(session, method, args.param)
         report = run_convergence(
-            session, method, size, args.time_limit, progress=sys.stderr.isatty()
+            session,
+            method,
+            size,
+            args.time_limit,
+            progress=sys.stderr.isatty(),
+            resume=args.resume,
         )
     finally:
         session.release()

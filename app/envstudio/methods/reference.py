@@ -77,6 +77,10 @@ class ConvergenceStatus:
     checks: list[dict] = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
 
+    def elapsed(self) -> float:
+        """Wall seconds since ``started`` (a resumed run counts its earlier runs' time)."""
+        return time.perf_counter() - self.started
+
     def describe(self) -> str:
         """One line for the UI and the CLI."""
         change = "—" if self.rms_change is None else f"{100 * self.rms_change:.3f} %"
@@ -233,8 +237,7 @@ class ReferenceMethod(Method):
             return line + " (budget spent: NOT converged)"
         projection = project_convergence(self.status.checks, float(self.values["tolerance"]))
         if projection is not None:
-            elapsed = time.perf_counter() - self.status.started
-            line += f", ≈ {_duration(projection['seconds'] - elapsed)} to go"
+            line += f", ≈ {_duration(projection['seconds'] - self.status.elapsed())} to go"
         return line
 
     # -- rendering ---------------------------------------------------------------------------
@@ -444,7 +447,7 @@ class ReferenceMethod(Method):
                 {
                     "samples": self.status.samples,
                     "change": change,
-                    "seconds": time.perf_counter() - self.status.started,
+                    "seconds": self.status.elapsed(),
                 }
             )
             self.status.converged = change < float(self.values["tolerance"])
@@ -457,11 +460,14 @@ class ReferenceMethod(Method):
 
         Keys: ``sum``, ``sum_sq`` ((h, w, 4) float32, row 0 at the top),
         ``batches``, ``checked_samples`` (int64), ``rms_change`` (float64, NaN
-        before the first check) and ``snapshot`` ((h, w, 3) float64 estimate of
-        the last doubling, or an empty array).
+        before the first check), ``snapshot`` ((h, w, 3) float64 estimate of
+        the last doubling, or an empty array), ``checks`` ((k, 3) float64:
+        samples, change, seconds of every doubling) and ``seconds`` (float64
+        wall time spent accumulating, over all the runs that built it).
         """
         total, squares = self._read()
         change = self.status.rms_change
+        checks = [[c["samples"], c["change"], c["seconds"]] for c in self.status.checks]
         return {
             "sum": total,
             "sum_sq": squares,
@@ -469,6 +475,8 @@ class ReferenceMethod(Method):
             "checked_samples": np.int64(self.status.checked_samples),
             "rms_change": np.float64(np.nan if change is None else change),
             "snapshot": np.zeros(0) if self._snapshot is None else self._snapshot,
+            "checks": np.asarray(checks, np.float64).reshape(-1, 3),
+            "seconds": np.float64(self.status.elapsed()),
         }
 
     def resume(self, state: dict[str, npt.NDArray]) -> None:
@@ -498,6 +506,12 @@ class ReferenceMethod(Method):
             self.status.converged = change < float(self.values["tolerance"])
         snapshot = state["snapshot"]
         self._snapshot = snapshot.astype(np.float64) if snapshot.size else None
+        checks = state.get("checks", np.zeros((0, 3)))
+        self.status.checks = [
+            {"samples": int(n), "change": float(change), "seconds": float(seconds)}
+            for n, change, seconds in checks
+        ]
+        self.status.started = time.perf_counter() - float(state.get("seconds", 0.0))
 
     # -- resources ---------------------------------------------------------------------------
 

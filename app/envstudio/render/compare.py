@@ -400,11 +400,7 @@ def _converge(
     """
     budget = int(reference.values["max_samples"])
     frames_ms: list[float] = []
-    saved_at = time.perf_counter()
-    path = reference_cache.cache_path(session, reference, size) if cache else None
-    state = reference_cache.load_state(path) if path else None
-    if state is not None:
-        reference.resume(state)
+    checkpoint = reference_cache.Checkpoint(session, reference, size) if cache else None
     with tqdm(
         total=budget,
         desc="reference",
@@ -414,7 +410,6 @@ def _converge(
         bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
     ) as bar:
         frames_ms.append(_timed_frame(session, reference, size))
-        resumed = int(state["batches"]) * int(reference.values["samples"]) if state else 0
         if not reference.coverage().any():
             camera = session.camera
             raise ParameterError(
@@ -427,13 +422,14 @@ def _converge(
             if reference.finished():
                 break
             frames_ms.append(_timed_frame(session, reference, size))
-            if path and time.perf_counter() - saved_at > reference_cache.SAVE_INTERVAL_S:
-                reference_cache.save_state(path, reference.accumulation_state())
-                saved_at = time.perf_counter()
-    if path:
-        reference_cache.save_state(path, reference.accumulation_state())
+            if checkpoint:
+                checkpoint.save_if_due()
+    resumed = 0
+    if checkpoint:
+        checkpoint.save()
+        resumed = checkpoint.resumed_samples
     if resumed:
-        print(f"reference: resumed at {resumed} spp from {path}", file=sys.stderr)
+        print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
     print(f"reference: {reference.status_line()}", file=sys.stderr)
     mask = reference.coverage()
     estimate_y = reference.estimate()[mask] @ LUMINANCE

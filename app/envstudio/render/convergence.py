@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from envstudio.gpu.context import describe
 from envstudio.methods.reference import ReferenceMethod, project_convergence
+from envstudio.render.reference_cache import Checkpoint
 from envstudio.render.session import RenderSession
 
 
@@ -26,6 +27,7 @@ def run_convergence(
     size: tuple[int, int],
     time_limit_s: float,
     progress: bool = True,
+    resume: bool = False,
 ) -> dict:
     """Accumulate ``method`` until it converges, spends its budget or runs out of time.
 
@@ -41,16 +43,22 @@ def run_convergence(
         Wall-clock limit in seconds.
     progress : bool
         Show a bar with the latest change on stderr.
+    resume : bool
+        Continue the accumulation saved by an earlier run with the same inputs
+        (render/reference_cache.py) and save this one every minute and at the
+        end; the checks and seconds then count every run that built it.
 
     Returns
     -------
     dict
         JSON-ready: device, size, parameters, ``checks`` (samples, change,
-        seconds at each doubling), converged, seconds, samples, and
+        seconds at each doubling), converged, ``seconds`` (all runs),
+        ``run_seconds`` (this run), ``resumed_samples``, samples, and
         ``projection`` (slope, samples and seconds to the tolerance) when it
         stopped short with at least two checks.
     """
     tolerance = float(method.values["tolerance"])
+    checkpoint = Checkpoint(session, method, size) if resume else None
     session.ctx.finish()
     start = time.perf_counter()
     with tqdm(
@@ -68,6 +76,10 @@ def run_convergence(
             bar.set_postfix_str(method.status_line())
             if method.finished() or elapsed >= time_limit_s:
                 break
+            if checkpoint:
+                checkpoint.save_if_due()
+    if checkpoint:
+        checkpoint.save()
     checks = method.status.checks
     report = {
         "device": describe(session.ctx),
@@ -77,7 +89,9 @@ def run_convergence(
         "checks": checks,
         "converged": method.status.converged,
         "samples": method.status.samples,
-        "seconds": elapsed,
+        "seconds": method.status.elapsed(),
+        "run_seconds": elapsed,
+        "resumed_samples": checkpoint.resumed_samples if checkpoint else 0,
     }
     if not method.status.converged:
         report["projection"] = project_convergence(checks, tolerance)
@@ -91,6 +105,8 @@ def format_convergence(report: dict) -> str:
         f"tolerance: {100 * report['tolerance']:.3g} %",
         f"{'spp':>9} {'half-change':>12} {'seconds':>10}",
     ]
+    if report["resumed_samples"]:
+        lines[0] += f"  (resumed at {report['resumed_samples']} spp)"
     for check in report["checks"]:
         lines.append(
             f"{check['samples']:>9} {100 * check['change']:>11.4f}% {check['seconds']:>10.1f}"

@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -85,3 +86,45 @@ def save_state(path: Path, state: dict[str, np.ndarray]) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez(handle, **state)
+
+
+class Checkpoint:
+    """Resume ``reference`` from its saved accumulation and save it as it goes.
+
+    Parameters
+    ----------
+    session : RenderSession
+        The scene and camera the accumulation belongs to.
+    reference : ReferenceMethod
+        With its parameters set; :meth:`ReferenceMethod.resume` is called at
+        once when a saved state exists.
+    size : (int, int)
+        Frame width and height in pixels.
+
+    Attributes
+    ----------
+    path : Path
+        The cache file (:func:`cache_path`).
+    resumed_samples : int
+        Samples per pixel taken from the saved state (0 when starting afresh).
+    """
+
+    def __init__(self, session: RenderSession, reference: ReferenceMethod, size: tuple[int, int]):
+        self.reference = reference
+        self.path = cache_path(session, reference, size)
+        state = load_state(self.path)
+        self.resumed_samples = 0
+        if state is not None:
+            reference.resume(state)
+            self.resumed_samples = int(state["batches"]) * int(reference.values["samples"])
+        self._saved_at = time.perf_counter()
+
+    def save_if_due(self) -> None:
+        """Save when :data:`SAVE_INTERVAL_S` has passed since the last save."""
+        if time.perf_counter() - self._saved_at > SAVE_INTERVAL_S:
+            self.save()
+
+    def save(self) -> None:
+        """Save the accumulation now (atomically)."""
+        save_state(self.path, self.reference.accumulation_state())
+        self._saved_at = time.perf_counter()
