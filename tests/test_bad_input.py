@@ -105,6 +105,7 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         (["bench", "--methods", "mirror,nope"], ["unknown method 'nope'"]),
         (["bench", "--converge", "--methods", "kautz"], ["--converge", "only 'reference'"]),
         (["bench", "--converge", "--time-limit", "-1"], ["--time-limit -1", "positive"]),
+        (["bench", "--resume"], ["--resume", "only with --converge"]),
         (["render", "--bogus", "-o", "OUT"], ["unrecognized arguments: --bogus"]),
     ],
 )

@@ -145,6 +145,8 @@ def run_bench(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if args.converge:
         return _run_convergence(args, size)
+    if args.resume:
+        raise ParameterError("--resume: only with --converge (it resumes a reference accumulation)")
     names = args.methods.split(",") if args.methods else list(available_methods())
     for name in names:
         method_class(name)
@@ -184,8 +186,6 @@ def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
 
     if args.methods not in (None, "reference"):
         raise ParameterError(f"--converge --methods {args.methods}: only 'reference' converges")
-    if args.resume and not args.converge:
-        raise ParameterError("--resume: only with --converge")
     if not args.time_limit > 0:
         raise ParameterError(f"--time-limit {args.time_limit}: expected a positive number")
     json_out = check_output_path(args.json_out) if args.json_out else None
