@@ -167,6 +167,27 @@ def test_diffuse_and_glossy_match_brute_force_within_the_reported_confidence(gl_
     session.release()
 
 
+@pytest.mark.parametrize("azimuth", [0.0, 90.0])
+def test_glossy_lobe_sampled_inside_its_cap_is_unbiased_across_the_lat_long_seam(gl_ctx, azimuth):
+    # caps about r crossing u = 0 (+Z) wrap their columns: at azimuth 0 the sphere's centre
+    # reflects there, at 90 its rim does
+    img = smooth_environment(96)
+    session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
+    session.camera.azimuth = azimuth
+    method, inside, normal, view = converge(
+        session, 16, kd=0.0, fresnel=1.0, phong_exponent=50.0, samples=16
+    )
+    cos = np.sum(normal * view, -1)
+    expected = brute_force.phong(img, 2 * cos[..., None] * normal - view, 50.0)[inside]
+    est, se = method.estimate()[inside], method.standard_error()[inside]
+    ratio = np.mean(est / expected, -1)
+    for low in (0.2, 0.4, 0.6, 0.8):
+        band = (cos[inside] > low) & (cos[inside] <= low + 0.2)
+        assert abs(ratio[band].mean() - 1) < 0.003, f"n.v in ({low}, {low + 0.2}]"
+    assert np.mean(np.abs(est - expected) < 4 * se) > 0.99
+    session.release()
+
+
 def test_sobol_sequence_beats_independent_batches_and_its_error_bar_is_an_upper_bound(gl_ctx):
     img = smooth_environment()
     errors = {}
@@ -209,15 +230,22 @@ def test_diffuse_part_matches_brute_force_irradiance_within_half_a_percent(gl_ct
     session.release()
 
 
-def test_microfacet_model_matches_brute_force_within_the_reported_confidence(gl_ctx):
+# (k_d, f_λ, N, map rows): with a diffuse term environment samples come from the whole map,
+# without one from the cap about the mirror direction (environment_sampling=lobe)
+@pytest.mark.parametrize(
+    ("kd", "fresnel", "exponent", "rows"), [(0.3, 0.5, 4.0, 48), (0.0, 1.0, 50.0, 96)]
+)
+def test_microfacet_model_matches_brute_force_within_the_reported_confidence(
+    gl_ctx, kd, fresnel, exponent, rows
+):
     # a lobe several texels wide, so the texel-centre sum is an accurate quadrature
-    img = smooth_environment(48)
+    img = smooth_environment(rows)
     session = RenderSession(sphere_scene(Environment(img), rings=256), ctx=gl_ctx)
     method, inside, normal, view = converge(
-        session, 16, model="microfacet", kd=0.3, fresnel=0.5, phong_exponent=4.0, samples=16
+        session, 16, model="microfacet", kd=kd, fresnel=fresnel, phong_exponent=exponent, samples=16
     )
-    alpha = np.sqrt(2.0 / (4 * 4.0 + 2.0))
-    expected = brute_force.microfacet(img, normal[inside], view[inside], alpha, 0.5, 0.3)
+    alpha = np.sqrt(2.0 / (4 * exponent + 2.0))
+    expected = brute_force.microfacet(img, normal[inside], view[inside], alpha, fresnel, kd)
     est, se = method.estimate()[inside], method.standard_error()[inside]
     assert abs(np.mean(est / expected) - 1) < 0.01, np.mean(est / expected)
     assert np.mean(np.abs(est - expected) < 4 * se) > 0.98

@@ -118,6 +118,13 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     float alpha = sqrt(2.0 / (4.0 * u_phong_exponent + 2.0));
     float n_dot_v = max(dot(n, v), 1e-4);
     float F_view = schlick_fresnel(u_fresnel, n_dot_v);
+    // Without a diffuse term, environment samples come from the cap about the
+    // mirror direction where D(h) is above LOBE_CAP_FLOOR of its peak
+    // (tan(theta_h) = alpha sqrt(1 / sqrt(floor) - 1), theta_l ~ 2 theta_h);
+    // the GGX samples cover the rest, as for the Phong lobe.
+    float cap = min(2.0 * atan(alpha * sqrt(1.0 / sqrt(LOBE_CAP_FLOOR) - 1.0)), 0.5 * PI);
+    bool cone = u_environment_sampling == 1 && u_kd == 0.0
+                && setup_cone(reflect(-v, n), cos(cap));
     vec3 result = vec3(0.0);
     for (int technique = 0; technique < 2; ++technique) {
         vec2 xi = technique == 0 ? g_lobe : g_environment;
@@ -126,7 +133,7 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
             vec3 h = sample_ggx_half(n, alpha, xi);
             l = reflect(-v, h);
         } else {
-            l = sample_environment(xi);
+            l = cone ? sample_cone(xi) : sample_environment(xi);
         }
         float n_dot_l = dot(n, l);
         if (n_dot_l <= 0.0) continue;
@@ -135,15 +142,16 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
         float v_dot_h = max(dot(v, h), 1e-4);
         float D = ggx_d(n_dot_h, alpha);
         float pdf_brdf = D * n_dot_h / (4.0 * v_dot_h);
-        float pdf_env = env_pdf(l);
+        float pdf_env = cone ? cone_pdf(l) : env_pdf(l);
         float specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
                          / (4.0 * n_dot_l * n_dot_v);
         float diffuse = u_kd / PI * (1.0 - F_view);
         float f = (specular + diffuse) * n_dot_l;
         float pdf = technique == 0 ? pdf_brdf : pdf_env;
         float other = technique == 0 ? pdf_env : pdf_brdf;
-        // Balance weights sum to 1 wherever the environment pdf is positive (everywhere),
-        // so the diffuse part stays unbiased though the GGX technique ignores it.
+        // Balance weights sum to 1 wherever either pdf is positive: with a diffuse term
+        // the environment pdf is positive everywhere, so the diffuse part stays unbiased
+        // though the GGX technique ignores it; without one, the GGX pdf covers the lobe.
         if (pdf > 0.0) result += balance(pdf, other) * f * incident(p, n, l) / pdf;
     }
     return result;

@@ -110,6 +110,11 @@ int g_cone_col0;
 int g_cone_cols;
 float g_cone_total;
 
+// x modulo width for -width <= x < 2 width (GLSL leaves % of negatives undefined).
+int wrap_column(int x, int width) {
+    return x < 0 ? x + width : (x >= width ? x - width : x);
+}
+
 // Share of row `row`'s weight inside the rectangle's columns (wrapping at W).
 float cone_row_fraction(int row, int width) {
     if (g_cone_cols >= width) return 1.0;
@@ -141,7 +146,7 @@ bool setup_cone(vec3 axis, float cos_radius) {
         int col1 = int(ceil((uv.x + half_u) * float(size.x)));
         if (col1 - col0 < size.x) {
             g_cone_cols = col1 - col0;
-            g_cone_col0 = ((col0 % size.x) + size.x) % size.x;
+            g_cone_col0 = wrap_column(col0, size.x);
         }
     }
     g_cone_cdf[0] = 0.0;
@@ -159,7 +164,7 @@ float cone_pdf(vec3 l) {
     ivec2 size = textureSize(u_env_pdf_uv, 0);
     ivec2 texel = clamp(ivec2(latlong_uv(l) * vec2(size)), ivec2(0), size - 1);
     int row = texel.y - g_cone_row0;
-    int column = ((texel.x - g_cone_col0) % size.x + size.x) % size.x;
+    int column = wrap_column(texel.x - g_cone_col0, size.x);
     if (row < 0 || row >= g_cone_rows || column >= g_cone_cols) return 0.0;
     return env_pdf(l) / g_cone_total;
 }
