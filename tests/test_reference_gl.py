@@ -5,6 +5,7 @@ import pytest
 
 from envstudio.core import latlong
 from envstudio.core.fresnel import schlick
+from envstudio.io.scene_file import load_scene
 from envstudio.prefilter import brute_force
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
@@ -272,3 +273,23 @@ def test_bands_within_a_frame_budget_add_up_to_the_same_batches(gl_ctx):
     assert whole_frames == 2
     assert banded_frames > 2 * 3, "each batch should be split into several bands"
     np.testing.assert_allclose(banded, whole, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("scene", "trace", "choice", "inside_lobe"),
+    [
+        ("room", True, "auto", False),  # walls hide the environment: the whole map
+        ("room", False, "auto", True),  # not traced, nothing hides it
+        ("studio", True, "auto", True),  # nothing but the reflector
+        ("room", True, "lobe", True),
+        ("studio", True, "global", False),
+    ],
+)
+def test_auto_environment_sampling_avoids_the_lobe_where_local_objects_hide_the_map(
+    gl_ctx, scene, trace, choice, inside_lobe
+):
+    session = RenderSession(load_scene(scene), ctx=gl_ctx, cube_size=16)
+    method = session.method("reference")
+    method.values.update({"trace": trace, "environment_sampling": choice})
+    assert method._samples_inside_lobe(session.gpu_scene) is inside_lobe
+    session.release()

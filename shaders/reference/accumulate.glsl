@@ -32,7 +32,7 @@ uniform int u_samples;
 uniform int u_frame;
 
 uniform int u_sequence;
-uniform int u_environment_sampling;  // 0: the whole map; 1: restricted to the Phong lobe's cap
+uniform int u_environment_sampling;  // 0: the whole map; 1: inside the glossy lobe's cap
 
 const float LOBE_CAP_FLOOR = 1e-3;
 
