@@ -2,23 +2,31 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import moderngl
 
 from envstudio.errors import ContextError
 
 REQUIRED_VERSION = 330
+PREFERRED_VERSION = 430
 
 
 def create_headless_context() -> moderngl.Context:
-    """Create a standalone OpenGL 3.3+ core context through EGL (no display needed).
+    """Create a standalone OpenGL core context through EGL (no display needed).
 
-    On a machine without a GPU this is Mesa's llvmpipe.
+    4.3 (compute shaders: kautz's dynamic mode and cross-face filter) is asked
+    for first, because NVIDIA's EGL gives exactly the version requested and a
+    3.3 request gets 3.3; 3.3 is the fallback. On a machine without a GPU this
+    is Mesa's llvmpipe, which answers 4.5 either way.
 
     Raises
     ------
     ContextError
         If EGL or a 3.3 context is unavailable; the message says what to install.
     """
+    with contextlib.suppress(Exception):
+        return moderngl.create_context(standalone=True, backend="egl", require=PREFERRED_VERSION)
     try:
         ctx = moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_VERSION)
     except Exception as exc:

@@ -61,7 +61,8 @@ class PassTimer:
         self.times_ms[name] = self.times_ms.get(name, 0.0) + elapsed
 
     def release(self) -> None:
-        """Release the queries; safe to call twice."""
-        for query in self._queries.values():
-            query.release()
+        """Forget the queries; safe to call twice.
+
+        moderngl 5 gives ``Query`` no ``release``: its GL objects go with the context.
+        """
         self._queries.clear()

@@ -1,0 +1,40 @@
+"""The GPU clock of real GPUs, exercised on llvmpipe, and the context version asked for."""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from envstudio.gpu.timers import PassTimer
+
+
+def test_context_offers_compute_shaders(gl_ctx):
+    # kautz's dynamic mode needs 4.3; NVIDIA's EGL gives only the version requested
+    assert gl_ctx.version_code >= 430
+
+
+def test_timer_queries_measure_each_pass_and_release_twice(gl_ctx):
+    timer = PassTimer(gl_ctx)
+    timer.clock = "gpu-timer-query"  # the path taken on every non-software renderer
+    target = gl_ctx.simple_framebuffer((256, 256))
+    target.use()
+    program = gl_ctx.program(
+        vertex_shader="#version 330\nin vec2 p; void main() { gl_Position = vec4(p, 0, 1); }",
+        fragment_shader="#version 330\nout vec4 c; void main() {\n"
+        "float s = 0.0; for (int i = 0; i < 2000; i++) s += sin(float(i) * gl_FragCoord.x);\n"
+        "c = vec4(s); }",
+    )
+    quad = gl_ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], "f4"))
+    vao = gl_ctx.vertex_array(program, [(quad, "2f", "p")])
+    for _ in range(2):
+        timer.begin_frame()
+        with timer.measure("heavy"):
+            vao.render(moderngl.TRIANGLES)
+        with timer.measure("empty"):
+            pass
+        with timer.measure("heavy"):
+            vao.render(moderngl.TRIANGLES)
+    assert set(timer.times_ms) == {"heavy", "empty"}
+    assert timer.times_ms["heavy"] > timer.times_ms["empty"] >= 0.0
+    timer.release()
+    timer.release()
