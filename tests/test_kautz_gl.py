@@ -11,8 +11,12 @@ from envstudio.core import cubemap, latlong
 from envstudio.core.env_sampling import luminance
 from envstudio.core.sh_bands import BAND_SETS, a_hat, band_indices, sh_basis
 from envstudio.core.sh_lights import DiffuseProjector
+from envstudio.core.transforms import normal_matrix, perspective, rotation_xyz, translation
 from envstudio.envmap.conversions import read_cube
+from envstudio.envmap.dynamic_cube import DynamicCube, face_view
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, edge_jumps, mipmapped_cube
+from envstudio.gpu.mesh import GpuMesh
+from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.kautz import STATIC_HEIGHT
 from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
 from envstudio.render.session import RenderSession
@@ -286,3 +290,66 @@ def test_figure_commands_write_the_grid_and_the_seam_pair(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "rows b = 0.0, 0.8, 1.7, 2.4" in out and "cross-face across" in out
     assert main(["figure", "kautz-grid", "-o", str(tmp_path / "grid.exr")]) == 2
+
+
+def six_pass_capture(ctx, programs, environment, sh9, objects, size):
+    """Seed 000 section 5.1 as written: six 90° renders from the origin, one per face."""
+    background = programs.get("frame/background.glsl")
+    local = programs.get("frame/local_diffuse.glsl")
+    fbo = ctx.framebuffer(
+        [ctx.texture((size, size), 4, dtype="f4")], ctx.depth_renderbuffer((size, size))
+    )
+    projection = perspective(90.0, 1.0, 0.01, 1000.0)
+    environment.use(location=0)
+    background["u_environment"] = 0
+    faces = []
+    for face in range(6):
+        view = face_view(face, (0.0, 0.0, 0.0))
+        with ctx.scope(fbo, enable_only=moderngl.NOTHING):
+            ctx.viewport = (0, 0, size, size)
+            fbo.clear(depth=1.0)
+            inverse = np.linalg.inv(projection.astype(np.float64) @ view).astype(np.float32)
+            set_uniform(background, "u_inverse_view_projection", inverse)
+            ctx.vertex_array(background, []).render(moderngl.TRIANGLES, vertices=3)
+            ctx.enable(moderngl.DEPTH_TEST)
+            for name, value in (("u_sh9", sh9), ("u_view", view), ("u_projection", projection)):
+                set_uniform(local, name, value)
+            for mesh, model, normal, albedo in objects:
+                set_uniform(local, "u_model", model)
+                set_uniform(local, "u_normal_matrix", normal)
+                set_uniform(local, "u_albedo", albedo)
+                mesh.render(local)
+            pixels = np.frombuffer(fbo.read(components=4, dtype="f4"), np.float32)
+        faces.append(pixels.reshape(size, size, 4)[..., :3])
+    return np.stack(faces)
+
+
+def test_one_pass_strip_capture_equals_six_face_renders(gl_ctx, programs):
+    """The instanced strip (one draw per object) renders what six face passes render.
+
+    Two boxes straddle face edges (+X/+Y and -Z/-X/-Y), so the clip distances that
+    cut each instance to its sixth of the strip are exercised on every side.
+    """
+    n = 32
+    faces = 0.2 + 0.6 * (cubemap.texel_directions(n) * 0.5 + 0.5)
+    environment = upload_faces(gl_ctx, faces)
+    sh9 = np.linspace(0.1, 0.9, 27).reshape(9, 3).astype(np.float32)
+    mesh = GpuMesh(gl_ctx, box(0.8))
+    objects = []
+    red, green = ((1.3, 1.1, 0.3), (0.9, 0.1, 0.1)), ((-1.1, -1.0, -1.2), (0.1, 0.8, 0.2))
+    for offset, albedo in (red, green):
+        model = translation(offset) @ rotation_xyz((20.0, 35.0, 10.0))
+        objects.append((mesh, model, normal_matrix(model), albedo))
+    expected = six_pass_capture(gl_ctx, programs, environment, sh9, objects, n)
+    dynamic = DynamicCube(gl_ctx, programs, n)
+    dynamic.capture(environment, sh9, objects, (0.0, 0.0, 0.0))
+    captured = read_cube(dynamic.cube)[..., :3]
+    assert gl_ctx.error == "GL_NO_ERROR"
+    covered = np.abs(expected - faces).max(-1) > 1e-3
+    assert all(covered[face].sum() > 20 for face in (0, 1, 2, 3, 5)), covered.sum((1, 2))
+    assert covered[4].sum() == 0, "the boxes lie off +Z"
+    np.testing.assert_allclose(captured[~covered], faces[~covered], atol=1e-6)
+    mismatched = np.abs(captured - expected).max(-1) > 1e-4
+    assert mismatched.sum() <= 0.01 * covered.sum(), mismatched.sum((1, 2))
+    dynamic.release()
+    environment.release()

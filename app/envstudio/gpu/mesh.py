@@ -35,9 +35,9 @@ class GpuMesh:
             self._vaos[program.glo] = vao
         return vao
 
-    def render(self, program: moderngl.Program) -> None:
-        """Draw all triangles with ``program`` into the bound framebuffer."""
-        self.vao(program).render(moderngl.TRIANGLES)
+    def render(self, program: moderngl.Program, instances: int = 1) -> None:
+        """Draw all triangles with ``program`` into the bound framebuffer, ``instances`` times."""
+        self.vao(program).render(moderngl.TRIANGLES, instances=instances)
 
     def release(self) -> None:
         """Free buffers and vertex arrays; safe to call twice."""
