@@ -32,7 +32,8 @@ def test_gpu_bvh_hits_match_embree(gl_ctx, programs):
         tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return tex
 
-    program = programs.get("testing/trace_probe.glsl")
+    # with the stack the reference compiles for this scene (BVH depth + 2)
+    program = programs.get("testing/trace_probe.glsl", {"TRACE_STACK": trace.stack_size})
     trace.bind(program, 0)
     texture(origins).use(location=2)
     texture(directions).use(location=3)
@@ -78,3 +79,14 @@ def test_cpu_bvh_twin_matches_embree():
     first = RayMeshIntersector(mesh).intersects_first(origins, directions)
     ours = [intersect(bvh, tris, o, d)[1] for o, d in zip(origins, directions, strict=True)]
     np.testing.assert_array_equal(ours, first)
+
+
+def median_split_depth(count: int, leaf_size: int = 4) -> int:
+    return 0 if count <= leaf_size else 1 + median_split_depth(count - count // 2, leaf_size)
+
+
+def test_bvh_depth_is_that_of_the_median_split():
+    rng = np.random.default_rng(5)
+    for count in (1, 4, 5, 9, 100, 1000, 3674):
+        tris = rng.uniform(-1.0, 1.0, (count, 3, 3))
+        assert build_bvh(tris).depth == median_split_depth(count)

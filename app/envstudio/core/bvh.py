@@ -44,6 +44,19 @@ class FlatBVH:
         """Number of nodes."""
         return len(self.count)
 
+    @property
+    def depth(self) -> int:
+        """Edges on the longest path from the root to a leaf (0 for a single leaf)."""
+        deepest = 0
+        stack = [(0, 0)]
+        while stack:
+            node, level = stack.pop()
+            if self.count[node] > 0:
+                deepest = max(deepest, level)
+            else:
+                stack += [(node + 1, level + 1), (int(self.right_or_first[node]), level + 1)]
+        return deepest
+
 
 def build_bvh(triangles: npt.ArrayLike, leaf_size: int = 4) -> FlatBVH:
     """Build a BVH over (m, 3, 3) triangle vertex positions."""

@@ -364,7 +364,10 @@ class ReferenceMethod(Method):
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
-        program = self.programs.get("reference/accumulate.glsl", {"TRACE_LOCAL": int(trace)})
+        defines = {"TRACE_LOCAL": int(trace)}
+        if trace:
+            defines["TRACE_STACK"] = self._trace.stack_size
+        program = self.programs.get("reference/accumulate.glsl", defines)
         scene = frame.scene
         scene.latlong.use(location=0)
         set_uniform(program, "u_latlong", 0)

@@ -18,6 +18,8 @@ from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.context import GpuScene
 
 TEXTURE_WIDTH = 4096
+#: Reflector hits a traced ray follows as mirror bounces before it returns black.
+TRACE_BOUNCES = 3
 
 
 def scene_triangles(
@@ -86,6 +88,9 @@ class TraceData:
         extent = positions.reshape(-1, 3).max(axis=0) - positions.reshape(-1, 3).min(axis=0)
         self.ray_offset = float(1e-4 * np.linalg.norm(extent))
         self.triangle_count = len(order)
+        # The near-first traversal of trace.glsl holds at most one deferred sibling per
+        # level below the root plus the near child: depth + 1 entries, one more to spare.
+        self.stack_size = self.bvh.depth + 2
 
     def bind(self, program: moderngl.Program, first_unit: int) -> None:
         """Bind both textures and the ray offset to ``program``."""
@@ -94,6 +99,7 @@ class TraceData:
         set_uniform(program, "u_bvh_nodes", first_unit)
         set_uniform(program, "u_bvh_triangles", first_unit + 1)
         set_uniform(program, "u_ray_offset", self.ray_offset)
+        set_uniform(program, "u_trace_bounces", TRACE_BOUNCES)
 
     def release(self) -> None:
         """Free the textures; safe to call twice."""
