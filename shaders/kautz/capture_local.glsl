@@ -7,21 +7,12 @@
 // viewport would for a face rendered alone (seed 000 section 5.1 renders the
 // six faces in six passes; here the GPU does them in one).
 #if defined VERTEX_SHADER
-uniform mat4 u_model;
-uniform mat3 u_normal_matrix;
+#include "common/mesh_world.glsl"
 uniform mat4 u_face_views[6];
 uniform mat4 u_projection;
 
-in vec3 in_position;
-in vec3 in_normal;
-
-out vec3 v_world_position;
-out vec3 v_world_normal;
-
 void main() {
-    vec4 world = u_model * vec4(in_position, 1.0);
-    v_world_position = world.xyz;
-    v_world_normal = u_normal_matrix * in_normal;
+    vec4 world = mesh_world();
     vec4 clip = u_projection * u_face_views[gl_InstanceID] * world;
     gl_ClipDistance[0] = clip.w + clip.x;
     gl_ClipDistance[1] = clip.w - clip.x;

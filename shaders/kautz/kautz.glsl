@@ -19,23 +19,16 @@ uniform vec3 u_camera_position;
 uniform float u_fresnel;
 
 #if defined VERTEX_SHADER
-uniform mat4 u_model;
-uniform mat3 u_normal_matrix;
+#include "common/mesh_world.glsl"
 uniform mat4 u_view;
 uniform mat4 u_projection;
-in vec3 in_position;
-in vec3 in_normal;
-out vec3 v_world_position;
-out vec3 v_world_normal;
 #if !PER_PIXEL
 out vec3 v_irradiance;
 out float v_fresnel;
 #endif
 
 void main() {
-    vec4 world = u_model * vec4(in_position, 1.0);
-    v_world_position = world.xyz;
-    v_world_normal = u_normal_matrix * in_normal;
+    vec4 world = mesh_world();
     gl_Position = u_projection * u_view * world;
 #if !PER_PIXEL
     vec3 n = normalize(v_world_normal);
