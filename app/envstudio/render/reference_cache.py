@@ -12,10 +12,16 @@ reference's parameters except the stopping rules (``max_samples``,
 ``tolerance``), and the text of the shaders that compute it. The cache folder
 is ``$ENVSTUDIO_CACHE_DIR``, else ``$XDG_CACHE_HOME/envstudio``, else
 ``~/.cache/envstudio``.
+
+Keys change with every edit of a shader or a parameter, so old files are never
+read again; after each save the least recently used files are deleted until
+the folder holds at most ``$ENVSTUDIO_CACHE_MAX_MB`` megabytes (default
+:data:`DEFAULT_LIMIT_MB`). Loading a file marks it used.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import sys
@@ -24,12 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
+from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.methods.reference import ReferenceMethod
 from envstudio.render.session import RenderSession
 from envstudio.resources import shader_root
 
 SAVE_INTERVAL_S = 60.0
+DEFAULT_LIMIT_MB = 2048.0
 STOPPING_RULES = ("max_samples", "tolerance")
 SHADER_FOLDERS = ("common", "reference")
 
@@ -75,17 +83,70 @@ def load_state(path: Path) -> dict[str, np.ndarray] | None:
         return None
     try:
         with np.load(path) as data:
-            return {name: data[name] for name in data.files}
+            state = {name: data[name] for name in data.files}
+        os.utime(path)  # used now: the last to be pruned
+        return state
     except (OSError, ValueError, EOFError) as error:
         print(f"envstudio: warning: {path}: unreadable ({error}), starting over", file=sys.stderr)
         return None
 
 
 def save_state(path: Path, state: dict[str, np.ndarray]) -> None:
-    """Write ``state`` to ``path`` atomically (a crash leaves the previous file)."""
+    """Write ``state`` to ``path`` atomically (a crash leaves the previous file), then prune."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez(handle, **state)
+    prune(path.parent, path, cache_limit_bytes())
+
+
+def cache_limit_bytes() -> int:
+    """The cache's size limit: ``$ENVSTUDIO_CACHE_MAX_MB`` megabytes, else the default."""
+    raw = os.environ.get("ENVSTUDIO_CACHE_MAX_MB")
+    if raw is None:
+        return int(DEFAULT_LIMIT_MB * 2**20)
+    try:
+        megabytes = float(raw)
+    except ValueError:
+        megabytes = float("nan")
+    if not megabytes >= 0.0:
+        raise ParameterError(f"ENVSTUDIO_CACHE_MAX_MB={raw!r}: expected megabytes, a number >= 0")
+    return int(megabytes * 2**20)
+
+
+def prune(folder: Path, keep: Path, limit: int) -> list[Path]:
+    """Delete the least recently used saved accumulations in ``folder`` beyond ``limit`` bytes.
+
+    Parameters
+    ----------
+    folder
+        The cache's ``reference`` folder; only its ``*.npz`` files are counted.
+    keep
+        The file just written: never deleted, even alone over the limit.
+    limit
+        Bytes the folder may hold.
+
+    Returns
+    -------
+    list of Path
+        The deleted files, oldest first.
+    """
+    files = []
+    for path in folder.glob("*.npz"):
+        with contextlib.suppress(OSError):  # another process may delete it meanwhile
+            stat = path.stat()
+            files.append((stat.st_mtime, stat.st_size, path))
+    total = sum(size for _, size, _ in files)
+    deleted = []
+    for _, size, path in sorted(files, key=lambda entry: entry[0]):
+        if total <= limit:
+            break
+        if path == keep:
+            continue
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+        total -= size
+        deleted.append(path)
+    return deleted
 
 
 class Checkpoint:
@@ -110,6 +171,7 @@ class Checkpoint:
     """
 
     def __init__(self, session: RenderSession, reference: ReferenceMethod, size: tuple[int, int]):
+        cache_limit_bytes()  # a bad $ENVSTUDIO_CACHE_MAX_MB fails here, not at the first save
         self.reference = reference
         self.path = cache_path(session, reference, size)
         state = load_state(self.path)
