@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import moderngl
 import numpy as np
+import pytest
 
+from envstudio.errors import ParameterError
+from envstudio.gpu.context import require_version
 from envstudio.gpu.timers import PassTimer
 
 
@@ -38,3 +41,10 @@ def test_timer_queries_measure_each_pass_and_release_twice(gl_ctx):
     assert timer.times_ms["heavy"] > timer.times_ms["empty"] >= 0.0
     timer.release()
     timer.release()
+
+
+def test_a_feature_past_the_context_version_is_one_line(gl_ctx):
+    have = f"{gl_ctx.version_code // 100}.{gl_ctx.version_code % 100 // 10}"
+    require_version(gl_ctx, gl_ctx.version_code, "anything")
+    with pytest.raises(ParameterError, match=rf"^x needs OpenGL 9\.9; this context is {have}$"):
+        require_version(gl_ctx, 990, "x needs OpenGL 9.9")

@@ -34,7 +34,7 @@ def test_gpu_bvh_hits_match_embree(gl_ctx, programs):
 
     # with the stack the reference compiles for this scene (BVH depth + 2)
     program = programs.get("testing/trace_probe.glsl", {"TRACE_STACK": trace.stack_size})
-    trace.bind(program, 0)
+    trace.bind(program)
     texture(origins).use(location=2)
     texture(directions).use(location=3)
     program["u_origins"].value = 2

@@ -1,4 +1,4 @@
-#version 400 core
+#version 430 core
 // Method `reference`, accumulation pass: each frame adds one batch of
 // u_samples multiple-importance-sampled estimates (balance heuristic, Veach
 // 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel, drawn

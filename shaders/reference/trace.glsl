@@ -1,14 +1,13 @@
 // Ray tracing of the scene's triangles for the reference (local reflections,
 // self-occlusion, self-reflection). BVH layout of app/envstudio/core/bvh.py,
-// uploaded by app/envstudio/methods/tracing.py into RGBA32F textures of
-// width TRACE_TEXTURE_WIDTH:
-//   nodes:     2 texels per node: (min.xyz, right child or first triangle),
+// uploaded by app/envstudio/methods/tracing.py into two shader storage buffers
+// of vec4 (OpenGL 4.3; plain loads, where texelFetch went through the sampler):
+//   nodes:     2 vec4 per node: (min.xyz, right child or first triangle),
 //              (max.xyz, triangle count; 0 for interior nodes)
-//   triangles: 7 texels per triangle: v0, v1, v2, n0, n1, n2, (albedo.rgb, kind)
+//   triangles: 7 vec4 per triangle: v0, v1, v2, n0, n1, n2, (albedo.rgb, kind)
 //              kind 0 = local diffuse object, 1 = reflector
 #include "common/sh.glsl"
 
-#define TRACE_TEXTURE_WIDTH 4096
 #define TRACE_EDGE_EPSILON 1e-5
 // Traversal stack entries: methods/tracing.py sets the BVH's depth + 2, all the
 // near-first traversal can hold. The stack lives in per-ray local memory, so it
@@ -18,14 +17,10 @@
 #define TRACE_STACK 48
 #endif
 
-uniform sampler2D u_bvh_nodes;
-uniform sampler2D u_bvh_triangles;
+layout(std430, binding = 0) readonly buffer TraceNodes { vec4 trace_nodes[]; };
+layout(std430, binding = 1) readonly buffer TraceTriangles { vec4 trace_triangles[]; };
 uniform vec3 u_sh9[9];
 uniform float u_ray_offset;
-
-vec4 trace_fetch(sampler2D s, int i) {
-    return texelFetch(s, ivec2(i % TRACE_TEXTURE_WIDTH, i / TRACE_TEXTURE_WIDTH), 0);
-}
 
 // Moller-Trumbore; returns t > 0 or -1, barycentrics in uv.
 float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
@@ -51,8 +46,8 @@ float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
 // Entry distance of the ray into node's box, or -1 where it misses or enters
 // beyond t_max.
 float trace_box_entry(int node, vec3 o, vec3 inv, float t_max) {
-    vec3 t0 = (trace_fetch(u_bvh_nodes, 2 * node).xyz - o) * inv;
-    vec3 t1 = (trace_fetch(u_bvh_nodes, 2 * node + 1).xyz - o) * inv;
+    vec3 t0 = (trace_nodes[2 * node].xyz - o) * inv;
+    vec3 t1 = (trace_nodes[2 * node + 1].xyz - o) * inv;
     vec3 tmin = min(t0, t1);
     vec3 tmax = max(t0, t1);
     float near = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
@@ -78,14 +73,14 @@ bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 ba
         --top;
         if (entry[top] > t_hit) continue;
         int node = stack[top];
-        int link = int(trace_fetch(u_bvh_nodes, 2 * node).w);
-        int count = int(trace_fetch(u_bvh_nodes, 2 * node + 1).w);
+        int link = int(trace_nodes[2 * node].w);
+        int count = int(trace_nodes[2 * node + 1].w);
         if (count > 0) {
             for (int k = link; k < link + count; ++k) {
                 vec2 uv;
-                float t = ray_triangle(o, d, trace_fetch(u_bvh_triangles, 7 * k).xyz,
-                                       trace_fetch(u_bvh_triangles, 7 * k + 1).xyz,
-                                       trace_fetch(u_bvh_triangles, 7 * k + 2).xyz, uv);
+                float t = ray_triangle(o, d, trace_triangles[7 * k].xyz,
+                                       trace_triangles[7 * k + 1].xyz,
+                                       trace_triangles[7 * k + 2].xyz, uv);
                 if (t > 0.0 && t < t_hit) {
                     t_hit = t;
                     tri_hit = k;
@@ -129,13 +124,13 @@ uniform int u_trace_bounces;
 // normals cancel (seams and tips of open meshes): a zero-length normal would
 // make the bounce direction NaN, which misses everything and "sees" the sky.
 vec3 hit_shading_normal(int tri, vec2 uv) {
-    vec3 n = (1.0 - uv.x - uv.y) * trace_fetch(u_bvh_triangles, 7 * tri + 3).xyz
-             + uv.x * trace_fetch(u_bvh_triangles, 7 * tri + 4).xyz
-             + uv.y * trace_fetch(u_bvh_triangles, 7 * tri + 5).xyz;
+    vec3 n = (1.0 - uv.x - uv.y) * trace_triangles[7 * tri + 3].xyz
+             + uv.x * trace_triangles[7 * tri + 4].xyz
+             + uv.y * trace_triangles[7 * tri + 5].xyz;
     if (dot(n, n) > 1e-8) return normalize(n);
-    vec3 a = trace_fetch(u_bvh_triangles, 7 * tri).xyz;
-    return normalize(cross(trace_fetch(u_bvh_triangles, 7 * tri + 1).xyz - a,
-                           trace_fetch(u_bvh_triangles, 7 * tri + 2).xyz - a));
+    vec3 a = trace_triangles[7 * tri].xyz;
+    return normalize(cross(trace_triangles[7 * tri + 1].xyz - a,
+                           trace_triangles[7 * tri + 2].xyz - a));
 }
 vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
     if (dot(n, l) <= 0.0) return vec3(0.0);
@@ -148,7 +143,7 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
         if (!trace_closest(origin, direction, t, tri, uv)) return environment_radiance(direction);
         vec3 hit_normal = hit_shading_normal(tri, uv);
         if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
-        vec4 info = trace_fetch(u_bvh_triangles, 7 * tri + 6);
+        vec4 info = trace_triangles[7 * tri + 6];
         if (info.a < 0.5) {
             return info.rgb / 3.14159265358979
                    * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));

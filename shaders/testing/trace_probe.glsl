@@ -1,4 +1,4 @@
-#version 330 core
+#version 430 core
 // Test probe: pixel i traces ray i (origins and directions from two RGB32F
 // textures) through reference/trace.glsl and writes (t, triangle, 0, hit).
 #if defined VERTEX_SHADER

@@ -6,7 +6,7 @@ import contextlib
 
 import moderngl
 
-from envstudio.errors import ContextError
+from envstudio.errors import ContextError, ParameterError
 
 REQUIRED_VERSION = 330
 PREFERRED_VERSION = 430
@@ -47,3 +47,14 @@ def is_software_renderer(ctx: moderngl.Context) -> bool:
 def describe(ctx: moderngl.Context) -> str:
     """One line naming the renderer and GL version."""
     return f"{ctx.info.get('GL_RENDERER', '?')} | {ctx.info.get('GL_VERSION', '?')}"
+
+
+def require_version(ctx: moderngl.Context, version: int, what: str) -> None:
+    """Raise a one-line :class:`ParameterError` when ``ctx`` is older than ``version`` (430 = 4.3).
+
+    ``what`` names the feature and why it needs the version, e.g. "dynamic=true needs
+    OpenGL 4.3 compute shaders".
+    """
+    if ctx.version_code < version:
+        have = f"{ctx.version_code // 100}.{ctx.version_code % 100 // 10}"
+        raise ParameterError(f"{what}; this context is {have}")

@@ -48,7 +48,7 @@ import numpy.typing as npt
 from envstudio.core.sh_lights import DiffuseProjector
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
-from envstudio.errors import ParameterError
+from envstudio.gpu.context import require_version
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, GpuScene
@@ -302,11 +302,7 @@ class KautzMethod(Method):
         return self._centre
 
     def _require_compute(self, feature: str) -> None:
-        if self.ctx.version_code < 430:
-            version = f"{self.ctx.version_code // 100}.{self.ctx.version_code % 100 // 10}"
-            raise ParameterError(
-                f"{feature}=true needs OpenGL 4.3 compute shaders; this context is {version}"
-            )
+        require_version(self.ctx, 430, f"{feature}=true needs OpenGL 4.3 compute shaders")
 
     # -- resources ---------------------------------------------------------------------------
 

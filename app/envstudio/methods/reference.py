@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.env_sampling import EnvironmentDistribution
+from envstudio.gpu.context import require_version
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, GpuScene
@@ -364,6 +365,7 @@ class ReferenceMethod(Method):
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
+        require_version(self.ctx, 430, "method reference needs OpenGL 4.3 (storage buffers)")
         defines = {"TRACE_LOCAL": int(trace)}
         if trace:
             defines["TRACE_STACK"] = self._trace.stack_size
@@ -373,7 +375,7 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_latlong", 0)
         self._tables.bind(program, 1)
         if trace:
-            self._trace.bind(program, 4)
+            self._trace.bind(program)
             set_uniform(program, "u_sh9", scene.sh9)
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))

@@ -1,10 +1,11 @@
 """The scene's triangles on the GPU for ray tracing (BVH of core/bvh.py).
 
-Layout (read by shaders/reference/trace.glsl), RGBA32F textures 4096 texels wide:
-nodes take 2 texels — (min.xyz, right child or first triangle), (max.xyz,
-triangle count) — and triangles 7 — v0, v1, v2, n0, n1, n2, (albedo.rgb, kind)
-with kind 0 for local diffuse objects and 1 for reflectors. Positions and
-normals are in world space.
+Layout (read by shaders/reference/trace.glsl), two shader storage buffers of
+float32 vec4 (OpenGL 4.3), at binding points :data:`NODE_BINDING` and
+:data:`TRIANGLE_BINDING`: nodes take 2 — (min.xyz, right child or first
+triangle), (max.xyz, triangle count) — and triangles 7 — v0, v1, v2, n0, n1,
+n2, (albedo.rgb, kind) with kind 0 for local diffuse objects and 1 for
+reflectors. Positions and normals are in world space.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from envstudio.core.bvh import FlatBVH, build_bvh
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.context import GpuScene
 
-TEXTURE_WIDTH = 4096
+NODE_BINDING = 0
+TRIANGLE_BINDING = 1
 #: Reflector hits a traced ray follows as mirror bounces before it returns black.
 TRACE_BOUNCES = 3
 
@@ -50,22 +52,13 @@ def scene_triangles(
     return np.concatenate(positions), np.concatenate(normals), np.concatenate(info)
 
 
-def _texture(ctx: moderngl.Context, texels: npt.NDArray[np.float32]) -> moderngl.Texture:
-    rows = -(-len(texels) // TEXTURE_WIDTH)
-    padded = np.zeros((rows * TEXTURE_WIDTH, 4), dtype=np.float32)
-    padded[: len(texels)] = texels
-    tex = ctx.texture((TEXTURE_WIDTH, rows), 4, padded.tobytes(), dtype="f4")
-    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    return tex
-
-
 class TraceData:
-    """BVH and triangle textures of a :class:`GpuScene`.
+    """BVH and triangle buffers of a :class:`GpuScene`.
 
     Parameters
     ----------
     ctx
-        Context owning the textures.
+        Context owning the buffers.
     scene
         Scene whose nodes (with their current transforms) are traced.
     """
@@ -83,8 +76,8 @@ class TraceData:
         tris[:, 0:3, :3] = positions[order]
         tris[:, 3:6, :3] = normals[order]
         tris[:, 6] = info[order]
-        self.nodes = _texture(ctx, nodes.reshape(-1, 4))
-        self.triangles = _texture(ctx, tris.reshape(-1, 4))
+        self.nodes = ctx.buffer(nodes.tobytes())
+        self.triangles = ctx.buffer(tris.tobytes())
         extent = positions.reshape(-1, 3).max(axis=0) - positions.reshape(-1, 3).min(axis=0)
         self.ray_offset = float(1e-4 * np.linalg.norm(extent))
         self.triangle_count = len(order)
@@ -92,18 +85,16 @@ class TraceData:
         # level below the root plus the near child: depth + 1 entries, one more to spare.
         self.stack_size = self.bvh.depth + 2
 
-    def bind(self, program: moderngl.Program, first_unit: int) -> None:
-        """Bind both textures and the ray offset to ``program``."""
-        self.nodes.use(location=first_unit)
-        self.triangles.use(location=first_unit + 1)
-        set_uniform(program, "u_bvh_nodes", first_unit)
-        set_uniform(program, "u_bvh_triangles", first_unit + 1)
+    def bind(self, program: moderngl.Program) -> None:
+        """Bind both buffers to their binding points and set ``program``'s trace uniforms."""
+        self.nodes.bind_to_storage_buffer(NODE_BINDING)
+        self.triangles.bind_to_storage_buffer(TRIANGLE_BINDING)
         set_uniform(program, "u_ray_offset", self.ray_offset)
         set_uniform(program, "u_trace_bounces", TRACE_BOUNCES)
 
     def release(self) -> None:
-        """Free the textures; safe to call twice."""
-        for tex in (self.nodes, self.triangles):
-            if tex is not None:
-                tex.release()
+        """Free the buffers; safe to call twice."""
+        for buffer in (self.nodes, self.triangles):
+            if buffer is not None:
+                buffer.release()
         self.nodes = self.triangles = None

@@ -438,7 +438,7 @@ class Viewer(WindowConfig):
                 )
         except (UserError, ShaderCompileError) as exc:
             # a bad value, or a shader this driver cannot compile (e.g. the reference
-            # needs GLSL 4.00): say so and keep the viewer running
+            # needs GLSL 4.30): say so and keep the viewer running
             self._report_render_error(f"{self.method_name}: {str(exc).splitlines()[0]}")
         else:
             self._render_error = None
