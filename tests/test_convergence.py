@@ -33,7 +33,7 @@ def test_reference_converges_on_a_sphere_and_records_each_doubling(gl_ctx):
     session = RenderSession(sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx)
     method = session.method("reference")
     method.values.update({"trace": False, "kd": 0.8, "fresnel": 0.2, "phong_exponent": 30.0})
-    method.values.update({"tolerance": 0.01, "samples": 4})
+    method.values.update({"tolerance": 0.01, "samples": 4, "adaptive": False})
     report = run_convergence(session, method, (32, 32), time_limit_s=120.0, progress=False)
     assert report["converged"], report["checks"]
     samples = [c["samples"] for c in report["checks"]]
@@ -60,13 +60,15 @@ def test_a_time_limit_stops_short_and_projects(gl_ctx):
     session.release()
 
 
-def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx):
+@pytest.mark.parametrize("adaptive", [False, True])
+def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx, adaptive):
     def run(max_samples: int, resume: bool):
         session = RenderSession(
             sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx
         )
         method = session.method("reference")
         method.values.update({"trace": False, "tolerance": 1e-5, "samples": 4})
+        method.values["adaptive"] = adaptive
         method.values["max_samples"] = max_samples
         report = run_convergence(session, method, (32, 32), 120.0, progress=False, resume=resume)
         estimate = method.estimate()
@@ -76,11 +78,12 @@ def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx)
     first, _ = run(64, resume=True)
     resumed, estimate = run(256, resume=True)
     whole, expected = run(256, resume=False)
-    assert first["resumed_samples"] == 0 and resumed["resumed_samples"] == 64
+    assert first["resumed_samples"] == 0 and resumed["resumed_samples"] == first["samples"]
+    assert first["samples"] == 64 or adaptive  # adaptive: the mean over pixels passes 64
     # the doublings of the first run are kept, with their times, and the sequence continues
     assert resumed["checks"][: len(first["checks"])] == first["checks"]
     assert [c["samples"] for c in resumed["checks"]] == [c["samples"] for c in whole["checks"]]
     assert resumed["checks"][-1]["change"] == pytest.approx(whole["checks"][-1]["change"], rel=1e-4)
     assert resumed["seconds"] >= first["seconds"] + resumed["run_seconds"] * 0.99
     np.testing.assert_allclose(estimate, expected, rtol=1e-5, atol=1e-6)
-    assert "resumed at 64 spp" in format_convergence(resumed)
+    assert f"resumed at {first['samples']} spp" in format_convergence(resumed)

@@ -6,6 +6,7 @@ import pytest
 from envstudio.core import latlong
 from envstudio.core.fresnel import schlick
 from envstudio.io.scene_file import load_scene
+from envstudio.methods.sample_allocation import SOFTWARE_SAMPLES_PER_BATCH
 from envstudio.prefilter import brute_force
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
@@ -139,6 +140,53 @@ def test_environment_sampling_inside_the_lobe_is_unbiased_and_cuts_the_variance(
         variances[sampling] = np.mean(se[lit] ** 2)
         session.release()
     assert variances["global"] > 10 * variances["lobe"], variances
+
+
+@pytest.mark.parametrize("sampling", ["global", "lobe"])
+def test_adaptive_sampling_is_unbiased_reports_its_error_and_spends_where_it_is_noisy(
+    gl_ctx, sampling
+):
+    session = RenderSession(sphere_scene(Environment(lamps_environment()), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session,
+        32,
+        kd=0.0,
+        fresnel=1.0,
+        phong_exponent=100.0,
+        samples=4,
+        environment_sampling=sampling,
+        adaptive=True,
+    )
+    r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
+    expected = sum(
+        analytic_patch_lobe(r, 100.0, {**lamp, "cols": (c0, c1)}, sub=8)
+        for lamp in LAMPS
+        for c0, c1 in [(lamp["cols"][0], min(lamp["cols"][1], 128)), (128, lamp["cols"][1])]
+        if c1 > c0
+    )
+    state = method.accumulation_state()
+    covered = state["sum"][..., 3] > 0
+    units = (
+        state["allocation_units"] + (32 - state["allocated_at"]) * state["allocation_multipliers"]
+    )
+    multipliers = state["allocation_multipliers"]
+    # every pixel took all 32 batches; the noisy ones took up to 8x the samples in the last
+    # ones (llvmpipe: 32 samples per pixel and batch at most, SOFTWARE_SAMPLES_PER_BATCH)
+    assert np.all(state["sum"][..., 3][covered] == 32) and state["allocated_at"] == 32
+    assert multipliers[covered].max() == SOFTWARE_SAMPLES_PER_BATCH // 4
+    assert (multipliers[covered] == 1).mean() > 0.5
+    assert units[covered].max() > 32 * 4 and units[covered].min() == 32
+    assert method.status.samples == round(units[covered].mean() * 4)
+    est, se = method.estimate()[..., 0], method.standard_error()[..., 0]
+    boosted, plain = inside & (multipliers > 1), inside & (multipliers == 1)
+    assert np.median(se[boosted]) > 2 * np.median(se[plain]), "boosted where it was noisy"
+    lit = inside & (expected > 0.05 * expected[inside].max())
+    z = (est[lit] - expected[lit]) / se[lit]
+    # unbiased: the pixels' errors average out within their own spread
+    assert abs(z.mean()) < 4 / np.sqrt(lit.sum()), f"mean z {z.mean():.3f} over {lit.sum()}"
+    assert np.mean(np.abs(z) < 4) > 0.99, "outside the reported confidence"
+    assert 0.3 < np.mean(z**2) < 3.0, f"the reported error is not the spread: {np.mean(z**2)}"
+    session.release()
 
 
 def smooth_environment(height=32):

@@ -158,12 +158,26 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
 }
 
 uniform bool u_pixel_filter;
+// Adaptive sampling (methods/reference.py): per pixel, (samples-per-frame units
+// drawn before the allocation was set, multiplier m) and the batches since.
+uniform bool u_adaptive;
+uniform sampler2D u_allocation;
+uniform int u_batches_since_allocation;
 
 void main() {
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     vec3 batch = vec3(0.0);
+    int multiplier = 1;
     g_first_sample = uint(u_frame) * uint(u_samples);
-    for (int i = 0; i < u_samples; ++i) {
+    if (u_adaptive) {
+        // this pixel's own count, so its Sobol sequence runs on without gaps
+        vec2 allocation = texelFetch(u_allocation, ivec2(pixel), 0).rg;
+        multiplier = int(allocation.y);
+        g_first_sample = uint(allocation.x + float(u_batches_since_allocation) * allocation.y)
+                         * uint(u_samples);
+    }
+    int count = u_samples * multiplier;
+    for (int i = 0; i < count; ++i) {
         // With the pixel filter each sample sees another point of the pixel's
         // footprint (box filter, stratified): the anti-aliased image that
         // mip-mapped lookups approximate. Without it, the pixel centre only.
@@ -177,7 +191,8 @@ void main() {
         batch += u_brdf_model == 0 ? sample_eq8(p, n, v, r, pixel, uint(i))
                                    : sample_microfacet(p, n, v, pixel, uint(i));
     }
-    batch /= float(u_samples);
+    batch /= float(count);
+    // every batch mean weighs 1, whatever its size (methods/sample_allocation.py)
     f_sum = vec4(batch, 1.0);
     f_sum_sq = vec4(batch * batch, 1.0);
 }

@@ -12,6 +12,12 @@ faster than 1/sqrt(n)) or from independent batches (``sequence=random``, whose
 batch-mean spread is an exact standard error; under ``sobol`` it overstates
 the error).
 
+With ``adaptive`` on, every pixel's share of each batch follows its own
+error: at every doubling from :data:`ADAPT_FROM_BATCHES` on, pixel i draws
+m_i × ``samples`` estimates per batch, m_i ∝ its standard deviation (Neyman
+allocation, methods/sample_allocation.py). Each batch mean keeps weight 1, and
+each pixel's Sobol sequence continues at its own count.
+
 Convergence is judged by the successive-half criterion: at every doubling of
 the batch count the estimate I_n is compared with I_{n/2}; the reference is
 converged when RMS(I_n − I_{n/2}) / RMS(I_n) over the reflector pixels falls
@@ -33,11 +39,16 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.env_sampling import EnvironmentDistribution
-from envstudio.gpu.context import require_version
+from envstudio.gpu.context import is_software_renderer, require_version
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, GpuScene
 from envstudio.methods.parameters import Parameter
+from envstudio.methods.sample_allocation import (
+    MAX_MULTIPLIER,
+    SOFTWARE_SAMPLES_PER_BATCH,
+    SampleAllocation,
+)
 from envstudio.methods.tracing import TraceData
 
 MODELS = ("phong", "microfacet")
@@ -45,6 +56,7 @@ SEQUENCES = ("random", "sobol")
 ENVIRONMENT_SAMPLING = ("auto", "global", "lobe")
 FIT_CHECKS = 4
 FLATTEST_SLOPE = -0.1
+ADAPT_FROM_BATCHES = 8
 
 
 @dataclass
@@ -188,6 +200,13 @@ class ReferenceMethod(Method):
             "samples", "int", 8, 1, 256, "spp/frame", "Estimates per pixel added each frame."
         ),
         Parameter(
+            "adaptive",
+            "bool",
+            True,
+            help="At every doubling, give each pixel 1-16 x `samples` per frame in proportion to "
+            "its standard error (more where the image is noisy).",
+        ),
+        Parameter(
             "max_samples",
             "int",
             8192,
@@ -224,8 +243,10 @@ class ReferenceMethod(Method):
         self._snapshot: npt.NDArray[np.float64] | None = None
         self._pending_state: dict[str, npt.NDArray] | None = None
         self._band_start = 0
-        self._row_pixels: npt.NDArray[np.int64] | None = None
+        self._row_work: npt.NDArray[np.float64] | None = None
         self._pixel_cost_s: float | None = None
+        self._allocation: moderngl.Texture | None = None  # (units, m) per pixel, for the shader
+        self._sample_allocation = SampleAllocation.plain((1, 1))
 
     def finished(self) -> bool:
         """Converged, or the sample budget is spent."""
@@ -282,9 +303,9 @@ class ReferenceMethod(Method):
             self._accumulate_band(frame, self._band_start, rows)
             if self.frame_budget_ms is not None:
                 self.ctx.finish()
-                pixels = int(self._row_pixels[self._band_start : self._band_start + rows].sum())
-                if pixels > 0:
-                    self._pixel_cost_s = (time.perf_counter() - band_start) / pixels
+                work = float(self._row_work[self._band_start : self._band_start + rows].sum())
+                if work > 0:
+                    self._pixel_cost_s = (time.perf_counter() - band_start) / work
             self._band_start += rows
             if self._band_start >= height:
                 self._band_start = 0
@@ -296,7 +317,7 @@ class ReferenceMethod(Method):
 
     def _rows_within(self, seconds: float) -> int:
         """Rows from the current band start whose predicted cost fits ``seconds`` (at least 1)."""
-        counts = self._row_pixels[self._band_start :]
+        counts = self._row_work[self._band_start :]
         if self._pixel_cost_s is None:  # nothing measured yet: one row, or up to the first pixels
             return max(1, int(np.argmax(counts > 0))) if counts.any() else len(counts)
         cost = np.cumsum(counts) * self._pixel_cost_s
@@ -304,7 +325,7 @@ class ReferenceMethod(Method):
 
     def _finish_batch(self) -> None:
         self.status.batches += 1
-        self.status.samples = self.status.batches * int(self.values["samples"])
+        self.status.samples = self._mean_samples()
         if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
             self._check_convergence()
 
@@ -333,6 +354,7 @@ class ReferenceMethod(Method):
             self._ensure_targets(frame.size)
             self._fbo.clear(0.0, 0.0, 0.0, 0.0)
             self.status = ConvergenceStatus()
+            self._set_allocation(SampleAllocation.plain((frame.size[1], frame.size[0])))
             self._snapshot = None
             self._band_start = 0
             if self._pending_state is not None:
@@ -361,7 +383,10 @@ class ReferenceMethod(Method):
             depth = np.frombuffer(
                 self._depth_fbo.read(components=1, attachment=-1, dtype="f4"), np.float32
             )
-            self._row_pixels = np.count_nonzero(depth.reshape(h, w) < 1.0, axis=1)
+            # pixels per row (from the bottom) weighted by their samples per batch
+            covered = depth.reshape(h, w) < 1.0
+            multipliers = self._sample_allocation.multipliers[::-1]
+            self._row_work = (covered * multipliers).sum(axis=1, dtype=np.float64)
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
@@ -386,6 +411,11 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
         set_uniform(program, "u_environment_sampling", int(self._samples_inside_lobe(scene)))
         set_uniform(program, "u_frame", self.status.batches)
+        set_uniform(program, "u_adaptive", bool(self.values["adaptive"]))
+        since = self.status.batches - self._sample_allocation.at
+        set_uniform(program, "u_batches_since_allocation", since)
+        self._allocation.use(location=4)
+        set_uniform(program, "u_allocation", 4)
         self._fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
         self.ctx.depth_func = "<="
@@ -428,13 +458,14 @@ class ReferenceMethod(Method):
         return total[..., :3] / count
 
     def standard_error(self) -> npt.NDArray[np.float32]:
-        """(h, w, 3) standard error of :meth:`estimate` from the spread of the batch means."""
+        """(h, w, 3) standard error of :meth:`estimate` from the spread of the batch means.
+
+        With adaptive sampling the batches differ in size; the spread then
+        estimates their mean variance, and the error of their mean is still
+        its square root over the batch count.
+        """
         total, squares = self._read()
-        k = total[..., 3:]
-        safe = np.maximum(k, 2.0)
-        mean = total[..., :3] / safe
-        variance = np.maximum(squares[..., :3] / safe - mean**2, 0.0) * safe / (safe - 1.0)
-        return np.where(k >= 2, np.sqrt(variance / safe), np.float32(np.inf))
+        return np.sqrt(_batch_variance(total, squares) / np.maximum(total[..., 3:], 1.0))
 
     def coverage(self) -> npt.NDArray[np.bool_]:
         """(h, w) True where the reflectors have samples."""
@@ -448,6 +479,31 @@ class ReferenceMethod(Method):
             data = np.frombuffer(tex.read(), dtype=np.float32).reshape(h, w, 4)[::-1]
             out.append(data.copy())
         return out[0], out[1]
+
+    def _mean_samples(self) -> int:
+        """Estimates per covered pixel so far (the multipliers are fixed between doublings)."""
+        return self._sample_allocation.samples_per_pixel(
+            self.status.batches, int(self.values["samples"])
+        )
+
+    def _reallocate(self) -> None:
+        """Set each pixel's samples per batch from its standard deviation (Neyman, floored)."""
+        total, squares = self._read()
+        variance = np.nan_to_num(_batch_variance(total, squares), posinf=0.0).sum(-1)
+        covered = total[..., 3] > 0
+        largest = MAX_MULTIPLIER
+        if is_software_renderer(self.ctx):
+            largest = max(1, SOFTWARE_SAMPLES_PER_BATCH // int(self.values["samples"]))
+        self._set_allocation(
+            self._sample_allocation.reallocate(self.status.batches, variance, covered, largest)
+        )
+
+    def _set_allocation(self, allocation: SampleAllocation) -> None:
+        """Use ``allocation`` from the next batch on; the shader gets (units, m) per pixel."""
+        self._sample_allocation = allocation
+        units, _ = allocation.at_batch(allocation.at)
+        texels = np.dstack([units, allocation.multipliers]).astype(np.float32)[::-1]
+        self._allocation.write(np.ascontiguousarray(texels).tobytes())
 
     def _check_convergence(self) -> None:
         current = self.estimate().astype(np.float64)
@@ -468,6 +524,8 @@ class ReferenceMethod(Method):
             )
             self.status.converged = change < float(self.values["tolerance"])
         self._snapshot = current
+        if self.values["adaptive"] and self.status.batches >= ADAPT_FROM_BATCHES:
+            self._reallocate()
 
     # -- saving and resuming ----------------------------------------------------------------
 
@@ -478,8 +536,9 @@ class ReferenceMethod(Method):
         ``batches``, ``checked_samples`` (int64), ``rms_change`` (float64, NaN
         before the first check), ``snapshot`` ((h, w, 3) float64 estimate of
         the last doubling, or an empty array), ``checks`` ((k, 3) float64:
-        samples, change, seconds of every doubling) and ``seconds`` (float64
-        wall time spent accumulating, over all the runs that built it).
+        samples, change, seconds of every doubling), ``seconds`` (float64
+        wall time spent accumulating, over all the runs that built it),
+        and the sample allocation (:meth:`SampleAllocation.as_arrays`).
         """
         total, squares = self._read()
         change = self.status.rms_change
@@ -493,6 +552,7 @@ class ReferenceMethod(Method):
             "snapshot": np.zeros(0) if self._snapshot is None else self._snapshot,
             "checks": np.asarray(checks, np.float64).reshape(-1, 3),
             "seconds": np.float64(self.status.elapsed()),
+            **self._sample_allocation.as_arrays(),
         }
 
     def resume(self, state: dict[str, npt.NDArray]) -> None:
@@ -515,7 +575,8 @@ class ReferenceMethod(Method):
         batches = int(state["batches"])
         change = float(state["rms_change"])
         self.status.batches = batches
-        self.status.samples = batches * int(self.values["samples"])
+        self._set_allocation(SampleAllocation.from_arrays(state, shape[:2], batches))
+        self.status.samples = self._mean_samples()
         self.status.checked_samples = int(state["checked_samples"])
         if not np.isnan(change):
             self.status.rms_change = change
@@ -540,12 +601,16 @@ class ReferenceMethod(Method):
         self._depth = self.ctx.depth_renderbuffer(size)
         self._fbo = self.ctx.framebuffer([self._sum, self._sum_sq], self._depth)
         self._depth_fbo = self.ctx.framebuffer(depth_attachment=self._depth)
+        self._allocation = self.ctx.texture(size, 2, dtype="f4")
+        self._allocation.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
     def _release_targets(self) -> None:
-        for obj in (self._depth_fbo, self._fbo, self._sum, self._sum_sq, self._depth):
+        targets = (self._depth_fbo, self._fbo, self._sum, self._sum_sq, self._depth)
+        for obj in (*targets, self._allocation):
             if obj is not None:
                 obj.release()
         self._depth_fbo = self._fbo = self._sum = self._sum_sq = self._depth = None
+        self._allocation = None
 
     def release(self) -> None:
         """Free targets and sampling tables; safe to call twice."""
@@ -557,6 +622,17 @@ class ReferenceMethod(Method):
             self._trace.release()
             self._trace = None
         self._key = self._trace_key = None
+
+
+def _batch_variance(
+    total: npt.NDArray[np.float32], squares: npt.NDArray[np.float32]
+) -> npt.NDArray[np.float32]:
+    """(h, w, 3) sample variance of each pixel's batch means (inf with fewer than two)."""
+    k = total[..., 3:]
+    safe = np.maximum(k, 2.0)
+    mean = total[..., :3] / safe
+    variance = np.maximum(squares[..., :3] / safe - mean**2, 0.0) * safe / (safe - 1.0)
+    return np.where(k >= 2, variance, np.float32(np.inf))
 
 
 def project_convergence(checks: list[dict], tolerance: float) -> dict | None:

@@ -33,6 +33,7 @@ import numpy as np
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.methods.reference import ReferenceMethod
+from envstudio.methods.sample_allocation import SampleAllocation
 from envstudio.render.session import RenderSession
 from envstudio.resources import shader_root
 
@@ -178,7 +179,10 @@ class Checkpoint:
         self.resumed_samples = 0
         if state is not None:
             reference.resume(state)
-            self.resumed_samples = int(state["batches"]) * int(reference.values["samples"])
+            batches = int(state["batches"])
+            allocation = SampleAllocation.from_arrays(state, state["sum"].shape[:2], batches)
+            samples = int(reference.values["samples"])
+            self.resumed_samples = allocation.samples_per_pixel(batches, samples)
         self._saved_at = time.perf_counter()
 
     def save_if_due(self) -> None:
