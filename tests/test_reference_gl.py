@@ -108,27 +108,27 @@ def lamps_environment():
     return img
 
 
+def render_lamps(gl_ctx, batches, **params):
+    """A mirror-like sphere (Phong N = 100) under :data:`LAMPS` and its analytic lobe."""
+    session = RenderSession(sphere_scene(Environment(lamps_environment()), rings=256), ctx=gl_ctx)
+    method, inside, normal, view = converge(
+        session, batches, kd=0.0, fresnel=1.0, phong_exponent=100.0, **params
+    )
+    r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
+    expected = sum(
+        analytic_patch_lobe(r, 100.0, {**lamp, "cols": (c0, c1)}, sub=8)
+        for lamp in LAMPS  # split where a lamp crosses the u = 0 seam
+        for c0, c1 in [(lamp["cols"][0], min(lamp["cols"][1], 128)), (128, lamp["cols"][1])]
+        if c1 > c0
+    )
+    return session, method, inside, expected
+
+
 def test_environment_sampling_inside_the_lobe_is_unbiased_and_cuts_the_variance(gl_ctx):
     variances = {}
     for sampling in ("global", "lobe"):
-        session = RenderSession(
-            sphere_scene(Environment(lamps_environment()), rings=256), ctx=gl_ctx
-        )
-        method, inside, normal, view = converge(
-            session,
-            16,
-            kd=0.0,
-            fresnel=1.0,
-            phong_exponent=100.0,
-            samples=16,
-            environment_sampling=sampling,
-        )
-        r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
-        expected = sum(
-            analytic_patch_lobe(r, 100.0, {**lamp, "cols": (c0, c1)}, sub=8)
-            for lamp in LAMPS
-            for c0, c1 in [(lamp["cols"][0], min(lamp["cols"][1], 128)), (128, lamp["cols"][1])]
-            if c1 > c0
+        session, method, inside, expected = render_lamps(
+            gl_ctx, 16, samples=16, environment_sampling=sampling
         )
         est, se = method.estimate()[..., 0], method.standard_error()[..., 0]
         lit = inside & (expected > 0.05 * expected[inside].max())
@@ -146,23 +146,8 @@ def test_environment_sampling_inside_the_lobe_is_unbiased_and_cuts_the_variance(
 def test_adaptive_sampling_is_unbiased_reports_its_error_and_spends_where_it_is_noisy(
     gl_ctx, sampling
 ):
-    session = RenderSession(sphere_scene(Environment(lamps_environment()), rings=256), ctx=gl_ctx)
-    method, inside, normal, view = converge(
-        session,
-        32,
-        kd=0.0,
-        fresnel=1.0,
-        phong_exponent=100.0,
-        samples=4,
-        environment_sampling=sampling,
-        adaptive=True,
-    )
-    r = 2 * np.sum(normal * view, -1, keepdims=True) * normal - view
-    expected = sum(
-        analytic_patch_lobe(r, 100.0, {**lamp, "cols": (c0, c1)}, sub=8)
-        for lamp in LAMPS
-        for c0, c1 in [(lamp["cols"][0], min(lamp["cols"][1], 128)), (128, lamp["cols"][1])]
-        if c1 > c0
+    session, method, inside, expected = render_lamps(
+        gl_ctx, 32, samples=4, environment_sampling=sampling, adaptive=True
     )
     state = method.accumulation_state()
     covered = state["sum"][..., 3] > 0
