@@ -204,7 +204,8 @@ class ReferenceMethod(Method):
             "bool",
             True,
             help="At every doubling, give each pixel 1-16 x `samples` per frame in proportion to "
-            "its standard error (more where the image is noisy).",
+            "its standard error (more where the image is noisy; on software GL at most 32 "
+            "samples per pixel and frame).",
         ),
         Parameter(
             "max_samples",
