@@ -7,13 +7,15 @@ import numpy as np
 import pytest
 
 from envstudio.errors import ParameterError
-from envstudio.gpu.context import require_version
+from envstudio.gpu.context import PREFERRED_VERSION, require_version
 from envstudio.gpu.timers import PassTimer
 
 
-def test_context_offers_compute_shaders(gl_ctx):
-    # kautz's dynamic mode needs 4.3; NVIDIA's EGL gives only the version requested
-    assert gl_ctx.version_code >= 430
+def test_context_offers_what_the_reference_and_kautz_need(gl_ctx):
+    # storage buffers and compute shaders (4.3). llvmpipe answers 4.5 to any request, so
+    # this cannot show that 4.3 is asked for first; that mattered on NVIDIA's EGL, which
+    # gives exactly the version requested (seen on the H100, docs/kautz "On a GPU")
+    assert gl_ctx.version_code >= PREFERRED_VERSION
 
 
 def test_timer_queries_measure_each_pass_and_release_twice(gl_ctx):
