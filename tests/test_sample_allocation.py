@@ -12,15 +12,16 @@ from envstudio.methods.sample_allocation import (
 )
 
 
-def test_multipliers_are_powers_of_two_of_sigma_over_the_percentile_clipped_to_1_and_16():
+def test_multipliers_are_powers_of_two_of_sigma_over_the_percentile_clipped_to_1_and_4():
     base = np.ones(100)  # the 80th percentile of the covered pixels is 1
-    sigma = np.concatenate([base, [0.1, 1.4, 3.0, 6.0, 100.0, 0.0]]).reshape(1, -1)
+    sigma = np.concatenate([base, [0.1, 1.4, 2.2, 6.0, 100.0, 0.0]]).reshape(1, -1)
     covered = np.ones(sigma.shape, bool)
     covered[0, -1] = False
     assert np.percentile(sigma[covered], REFERENCE_PERCENTILE) == 1.0
     m = neyman_multipliers(sigma, covered)
     assert m[0, :100].tolist() == [1.0] * 100
-    assert m[0, 100:].tolist() == [1.0, 1.0, 4.0, 8.0, MAX_MULTIPLIER, 1.0]
+    assert m[0, 100:].tolist() == [1.0, 1.0, 2.0, MAX_MULTIPLIER, MAX_MULTIPLIER, 1.0]
+    assert MAX_MULTIPLIER == 4
 
 
 def test_no_known_deviation_leaves_every_pixel_at_the_plain_rate():

@@ -12,8 +12,12 @@
 // Model 1 (microfacet): k_d/pi (1 - F(n.v)) + GGX D G2 F(v.h) / (4 n.l n.v),
 //   alpha = sqrt(2 / (4N + 2)) (a Phong exponent N is about a Blinn exponent 4N).
 //
-// Outputs (additive blending): sum of batch means (rgb, a = batch count) and
-// sum of squared batch means, from which the method reports a standard error.
+// A batch may be drawn in chunks (u_chunk_first, u_chunk_samples): llvmpipe
+// ends an invocation's loops after 65 535 iterations in all, so there a pixel
+// draws at most SOFTWARE_SAMPLES_PER_BATCH (methods/sample_allocation.py) per
+// draw. Output (additive blending into the batch target): sum of the chunk's
+// estimates (rgb) and their count (a); merge_batch.glsl turns the batch into
+// its mean and adds it, and its square, to the accumulation.
 #if defined VERTEX_SHADER
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER
@@ -69,8 +73,7 @@ void draw_joint(uvec2 pixel, uint i) {
 
 in vec3 v_world_position;
 in vec3 v_world_normal;
-layout(location = 0) out vec4 f_sum;
-layout(location = 1) out vec4 f_sum_sq;
+layout(location = 0) out vec4 f_batch;
 
 float balance(float a, float b) { return a / max(a + b, 1e-30); }
 
@@ -163,6 +166,9 @@ uniform bool u_pixel_filter;
 uniform bool u_adaptive;
 uniform sampler2D u_allocation;
 uniform int u_batches_since_allocation;
+// This draw's part of the batch: samples [u_chunk_first, u_chunk_first + u_chunk_samples).
+uniform int u_chunk_first;
+uniform int u_chunk_samples;
 
 void main() {
     uvec2 pixel = uvec2(gl_FragCoord.xy);
@@ -177,7 +183,9 @@ void main() {
                          * uint(u_samples);
     }
     int count = u_samples * multiplier;
-    for (int i = 0; i < count; ++i) {
+    int last = min(count, u_chunk_first + u_chunk_samples);
+    if (last <= u_chunk_first) discard;  // this pixel's batch ended in an earlier chunk
+    for (int i = u_chunk_first; i < last; ++i) {
         // With the pixel filter each sample sees another point of the pixel's
         // footprint (box filter, stratified): the anti-aliased image that
         // mip-mapped lookups approximate. Without it, the pixel centre only.
@@ -191,9 +199,6 @@ void main() {
         batch += u_brdf_model == 0 ? sample_eq8(p, n, v, r, pixel, uint(i))
                                    : sample_microfacet(p, n, v, pixel, uint(i));
     }
-    batch /= float(count);
-    // every batch mean weighs 1, whatever its size (methods/sample_allocation.py)
-    f_sum = vec4(batch, 1.0);
-    f_sum_sq = vec4(batch * batch, 1.0);
+    f_batch = vec4(batch, float(last - u_chunk_first));
 }
 #endif

@@ -203,9 +203,8 @@ class ReferenceMethod(Method):
             "adaptive",
             "bool",
             True,
-            help="At every doubling, give each pixel 1-16 x `samples` per frame in proportion to "
-            "its standard error (more where the image is noisy; on software GL at most 32 "
-            "samples per pixel and frame).",
+            help="At every doubling, give each pixel 1-4 x `samples` per frame in proportion to "
+            "its standard error (more where the image is noisy).",
         ),
         Parameter(
             "max_samples",
@@ -237,8 +236,10 @@ class ReferenceMethod(Method):
         self._trace_key: tuple | None = None
         self._sum: moderngl.Texture | None = None
         self._sum_sq: moderngl.Texture | None = None
+        self._sums_fbo: moderngl.Framebuffer | None = None
+        self._batch: moderngl.Texture | None = None  # this batch's sums and counts
         self._depth: moderngl.Renderbuffer | None = None
-        self._fbo: moderngl.Framebuffer | None = None
+        self._batch_fbo: moderngl.Framebuffer | None = None
         self._depth_fbo: moderngl.Framebuffer | None = None
         self._key: tuple | None = None
         self._snapshot: npt.NDArray[np.float64] | None = None
@@ -325,6 +326,7 @@ class ReferenceMethod(Method):
         return max(1, int(np.searchsorted(cost, seconds, side="right")))
 
     def _finish_batch(self) -> None:
+        self._merge_batch()
         self.status.batches += 1
         self.status.samples = self._mean_samples()
         if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
@@ -353,7 +355,8 @@ class ReferenceMethod(Method):
         if key != self._key:
             self._key = key
             self._ensure_targets(frame.size)
-            self._fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self._sums_fbo.clear(0.0, 0.0, 0.0, 0.0)
+            self._batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
             self.status = ConvergenceStatus()
             self._set_allocation(SampleAllocation.plain((frame.size[1], frame.size[0])))
             self._snapshot = None
@@ -417,17 +420,45 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_batches_since_allocation", since)
         self._allocation.use(location=4)
         set_uniform(program, "u_allocation", 4)
-        self._fbo.use()
+        self._batch_fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
         self.ctx.depth_func = "<="
         self.ctx.blend_func = moderngl.ONE, moderngl.ONE
         self.ctx.blend_equation = moderngl.FUNC_ADD
         self.ctx.scissor = (0, first_row, frame.size[0], rows)
-        self._draw_reflectors(program, frame)
+        chunk = self._chunk_samples()
+        largest = int(self.values["samples"]) * int(self._sample_allocation.multipliers.max())
+        for first in range(0, largest, chunk):
+            set_uniform(program, "u_chunk_first", first)
+            set_uniform(program, "u_chunk_samples", chunk)
+            self._draw_reflectors(program, frame)
         self.ctx.scissor = None
         self.ctx.disable(moderngl.BLEND)
         self.ctx.blend_func = moderngl.DEFAULT_BLENDING
         self.ctx.depth_func = "<"
+
+    def _chunk_samples(self) -> int:
+        """Estimates a pixel draws per draw call: the whole batch, or on llvmpipe a chunk.
+
+        llvmpipe silently ends an invocation's loops after 65 535 iterations in
+        all (:data:`SOFTWARE_SAMPLES_PER_BATCH`), so there a batch of more
+        samples is drawn in several draws; the batch target adds them up.
+        """
+        if is_software_renderer(self.ctx):
+            return SOFTWARE_SAMPLES_PER_BATCH
+        return int(self.values["samples"]) * MAX_MULTIPLIER
+
+    def _merge_batch(self) -> None:
+        """Add the finished batch's mean per pixel (and its square) to the sums; clear it."""
+        program = self.programs.compute("reference/merge_batch.glsl")
+        self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
+        self._batch.bind_to_image(0, read=True, write=False)
+        self._sum.bind_to_image(1, read=True, write=True)
+        self._sum_sq.bind_to_image(2, read=True, write=True)
+        w, h = self._sum.size
+        program.run((w + 7) // 8, (h + 7) // 8)
+        self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
+        self._batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
 
     def _samples_inside_lobe(self, scene: GpuScene) -> bool:
         """Whether environment samples come from the lobe's cap (``environment_sampling``).
@@ -492,11 +523,8 @@ class ReferenceMethod(Method):
         total, squares = self._read()
         variance = np.nan_to_num(_batch_variance(total, squares), posinf=0.0).sum(-1)
         covered = total[..., 3] > 0
-        largest = MAX_MULTIPLIER
-        if is_software_renderer(self.ctx):
-            largest = max(1, SOFTWARE_SAMPLES_PER_BATCH // int(self.values["samples"]))
         self._set_allocation(
-            self._sample_allocation.reallocate(self.status.batches, variance, covered, largest)
+            self._sample_allocation.reallocate(self.status.batches, variance, covered)
         )
 
     def _set_allocation(self, allocation: SampleAllocation) -> None:
@@ -599,19 +627,21 @@ class ReferenceMethod(Method):
         self._release_targets()
         self._sum = self.ctx.texture(size, 4, dtype="f4")
         self._sum_sq = self.ctx.texture(size, 4, dtype="f4")
+        self._sums_fbo = self.ctx.framebuffer([self._sum, self._sum_sq])
+        self._batch = self.ctx.texture(size, 4, dtype="f4")
         self._depth = self.ctx.depth_renderbuffer(size)
-        self._fbo = self.ctx.framebuffer([self._sum, self._sum_sq], self._depth)
+        self._batch_fbo = self.ctx.framebuffer([self._batch], self._depth)
         self._depth_fbo = self.ctx.framebuffer(depth_attachment=self._depth)
         self._allocation = self.ctx.texture(size, 2, dtype="f4")
         self._allocation.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
     def _release_targets(self) -> None:
-        targets = (self._depth_fbo, self._fbo, self._sum, self._sum_sq, self._depth)
-        for obj in (*targets, self._allocation):
+        targets = (self._depth_fbo, self._batch_fbo, self._sums_fbo, self._depth)
+        for obj in (*targets, self._sum, self._sum_sq, self._batch, self._allocation):
             if obj is not None:
                 obj.release()
-        self._depth_fbo = self._fbo = self._sum = self._sum_sq = self._depth = None
-        self._allocation = None
+        self._depth_fbo = self._batch_fbo = self._sums_fbo = self._depth = None
+        self._sum = self._sum_sq = self._batch = self._allocation = None
 
     def release(self) -> None:
         """Free targets and sampling tables; safe to call twice."""

@@ -13,9 +13,9 @@ samples, which decided its later multipliers. A pixel that had by chance
 missed a small bright source would then keep its low early batches at full
 weight, while one that had hit it would dilute them: the mean is biased low.
 (The first version did that and measured 0.82 of a small patch's analytic
-lobe, but with 1024 samples per pixel and batch, where llvmpipe's loop limit,
-:data:`SOFTWARE_SAMPLES_PER_BATCH`, alone costs 0.905.) With equal weights
-each batch mean is unbiased given its size, and so is their average.
+lobe, but with 1024 samples per pixel and batch in one draw, where llvmpipe's
+loop limit, :data:`SOFTWARE_SAMPLES_PER_BATCH`, alone costs 0.905.) With equal
+weights each batch mean is unbiased given its size, and so is their average.
 """
 
 from __future__ import annotations
@@ -25,14 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-MAX_MULTIPLIER = 16
+MAX_MULTIPLIER = 4
 REFERENCE_PERCENTILE = 80.0
 #: llvmpipe ends every loop of a shader invocation once the invocation has run
 #: 65 535 loop iterations in all (measured: a 70 × 1000 nested loop counts to
 #: 65 405), silently: the estimate then misses terms and is biased (0.905 of the
 #: analytic lobe at 1024 samples per pixel and batch). A traced sample runs a
 #: few hundred iterations (the cap's rows, the CDF searches, the Sobol bits, the
-#: BVH walk), so on software renderers a pixel draws at most this many per batch.
+#: BVH walk), so on software renderers a pixel draws at most this many per draw,
+#: and a larger batch is drawn in chunks (methods/reference.py).
 SOFTWARE_SAMPLES_PER_BATCH = 32
 
 
@@ -91,7 +92,6 @@ class SampleAllocation:
         batches: int,
         batch_variance: npt.NDArray[np.float64],
         covered: npt.NDArray[np.bool_],
-        max_multiplier: int = MAX_MULTIPLIER,
     ) -> SampleAllocation:
         """The allocation from batch ``batches`` on.
 
@@ -104,14 +104,12 @@ class SampleAllocation:
             (0 where unknown).
         covered
             (h, w) pixels on the reflectors.
-        max_multiplier
-            The largest m (see :data:`SOFTWARE_SAMPLES_PER_BATCH`).
         """
         units, inverse = self.at_batch(batches)
         sigma = np.zeros(batch_variance.shape)  # standard deviation of one plain batch
         known = covered & (inverse > 0)
         sigma[known] = np.sqrt(batch_variance[known] * batches / inverse[known])
-        multipliers = neyman_multipliers(sigma, covered, max_multiplier)
+        multipliers = neyman_multipliers(sigma, covered)
         return SampleAllocation(units, inverse, multipliers, covered, batches)
 
     def as_arrays(self) -> dict[str, npt.NDArray]:
@@ -141,9 +139,8 @@ class SampleAllocation:
 def neyman_multipliers(
     sigma: npt.NDArray[np.float64],
     covered: npt.NDArray[np.bool_],
-    max_multiplier: int = MAX_MULTIPLIER,
 ) -> npt.NDArray[np.float32]:
-    """(h, w) powers of two in 1 … ``max_multiplier`` nearest to sigma / sigma_ref.
+    """(h, w) powers of two in 1 … :data:`MAX_MULTIPLIER` nearest to sigma / sigma_ref.
 
     sigma_ref is the :data:`REFERENCE_PERCENTILE`-th percentile of ``sigma``
     over the covered pixels; pixels off the reflectors, or all of them when no
@@ -157,5 +154,5 @@ def neyman_multipliers(
     if reference <= 0:
         reference = sigma[positive].min()
     exponent = np.round(np.log2(sigma[positive] / reference))
-    multipliers[positive] = np.clip(np.exp2(exponent), 1, max_multiplier)
+    multipliers[positive] = np.clip(np.exp2(exponent), 1, MAX_MULTIPLIER)
     return multipliers
