@@ -1,5 +1,10 @@
 """``bench --converge``: the reference timed to its tolerance, and the projection past a limit."""
 
+import os
+import signal
+import threading
+import time
+
 import numpy as np
 import pytest
 
@@ -87,3 +92,39 @@ def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx,
     assert resumed["seconds"] >= first["seconds"] + resumed["run_seconds"] * 0.99
     np.testing.assert_allclose(estimate, expected, rtol=1e-5, atol=1e-6)
     assert f"resumed at {first['samples']} spp" in format_convergence(resumed)
+
+
+def test_an_interrupted_run_saves_its_accumulation_and_the_next_one_resumes_it(gl_ctx):
+    def session_and_method():
+        session = RenderSession(
+            sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx
+        )
+        method = session.method("reference")
+        method.values.update({"trace": False, "tolerance": 1e-5, "samples": 4})
+        method.values["max_samples"] = 10_000_000
+        return session, method
+
+    session, method = session_and_method()
+
+    def interrupt_after_three_batches():
+        while method.status.batches < 3:
+            time.sleep(0.01)
+        os.kill(os.getpid(), signal.SIGINT)  # a real Ctrl-C, mid-run
+
+    thread = threading.Thread(target=interrupt_after_three_batches)
+    thread.start()
+    with pytest.raises(KeyboardInterrupt):
+        run_convergence(session, method, (32, 32), 600.0, progress=False, resume=True)
+    thread.join()
+    interrupted_at = method.status.batches
+    expected = method.estimate()
+    session.release()
+    assert interrupted_at >= 3
+
+    session, method = session_and_method()
+    method.values["max_samples"] = 4 * interrupted_at  # resume, then stop at the same count
+    report = run_convergence(session, method, (32, 32), 600.0, progress=False, resume=True)
+    assert report["resumed_samples"] == 4 * interrupted_at
+    assert method.status.batches == interrupted_at
+    np.testing.assert_array_equal(method.estimate(), expected)
+    session.release()

@@ -7,6 +7,7 @@ for bad input.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -193,7 +194,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the exit status."""
+    """Entry point; returns the exit status.
+
+    SIGTERM is handled like Ctrl-C, so a killed ``compare`` or ``bench
+    --converge --resume`` saves its reference accumulation before it exits.
+    """
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     try:
         args = build_parser().parse_args(argv)
         command = args.command or "view"

@@ -36,6 +36,7 @@ Reliability
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from collections.abc import Sequence
@@ -401,14 +402,17 @@ def _converge(
     budget = int(reference.values["max_samples"])
     frames_ms: list[float] = []
     checkpoint = reference_cache.Checkpoint(session, reference, size) if cache else None
-    with tqdm(
-        total=budget,
-        desc="reference",
-        unit="spp",
-        file=sys.stderr,
-        disable=not progress,
-        bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
-    ) as bar:
+    with (
+        tqdm(
+            total=budget,
+            desc="reference",
+            unit="spp",
+            file=sys.stderr,
+            disable=not progress,
+            bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
+        ) as bar,
+        checkpoint.saved_on_interrupt() if checkpoint else contextlib.nullcontext(),
+    ):
         frames_ms.append(_timed_frame(session, reference, size))
         if not reference.coverage().any():
             camera = session.camera

@@ -10,6 +10,7 @@ the last checks (:func:`~envstudio.methods.reference.project_convergence`).
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 
@@ -61,13 +62,16 @@ def run_convergence(
     checkpoint = Checkpoint(session, method, size) if resume else None
     session.ctx.finish()
     start = time.perf_counter()
-    with tqdm(
-        desc="reference",
-        unit="frame",
-        file=sys.stderr,
-        disable=not progress,
-        bar_format="{desc}: {n} frames {elapsed} {postfix}",
-    ) as bar:
+    with (
+        tqdm(
+            desc="reference",
+            unit="frame",
+            file=sys.stderr,
+            disable=not progress,
+            bar_format="{desc}: {n} frames {elapsed} {postfix}",
+        ) as bar,
+        checkpoint.saved_on_interrupt() if checkpoint else contextlib.nullcontext(),
+    ):
         while True:
             session.render_offscreen(method, size)
             session.ctx.finish()

@@ -26,6 +26,7 @@ import hashlib
 import os
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -194,3 +195,14 @@ class Checkpoint:
         """Save the accumulation now (atomically)."""
         save_state(self.path, self.reference.accumulation_state())
         self._saved_at = time.perf_counter()
+
+    @contextlib.contextmanager
+    def saved_on_interrupt(self) -> Iterator[None]:
+        """Save when the block is interrupted (Ctrl-C; the CLI turns SIGTERM into one too)."""
+        try:
+            yield
+        except KeyboardInterrupt:
+            self.save()
+            samples = self.reference.status.samples
+            print(f"reference: saved at {samples} spp to {self.path}", file=sys.stderr)
+            raise
