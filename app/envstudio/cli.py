@@ -85,7 +85,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     bench = sub.add_parser("bench", help="time every method per frame and per pass")
     _add_scene_options(bench)
-    bench.add_argument("--methods", help="comma-separated method names (default: all)")
+    bench.add_argument(
+        "--methods",
+        help="comma-separated method names (default: all but the progressive reference, "
+        "whose frame is one batch; see --converge)",
+    )
     bench.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT (default 1280x720)")
     bench.add_argument("--frames", type=int, default=60, help="measured frames per method")
     bench.add_argument("--warmup", type=int, default=5, help="unmeasured frames per method")

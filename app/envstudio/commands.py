@@ -137,6 +137,16 @@ def run_methods(args: argparse.Namespace) -> int:
     return 0
 
 
+def default_bench_methods() -> list[str]:
+    """What ``bench`` times without ``--methods``: every method that draws its image in one frame.
+
+    A progressive method's frame is one batch of an accumulation (a reference
+    batch at 1280x720 takes seconds on a software renderer); name it with
+    ``--methods`` to time its batches, or use ``bench --converge``.
+    """
+    return [name for name, cls in available_methods().items() if not cls.progressive]
+
+
 def run_bench(args: argparse.Namespace) -> int:
     """``envstudio bench``: per-method frame and pass times."""
     from envstudio.render.bench import format_report
@@ -147,7 +157,7 @@ def run_bench(args: argparse.Namespace) -> int:
         return _run_convergence(args, size)
     if args.resume:
         raise ParameterError("--resume: only with --converge (it resumes a reference accumulation)")
-    names = args.methods.split(",") if args.methods else list(available_methods())
+    names = args.methods.split(",") if args.methods else default_bench_methods()
     for name in names:
         method_class(name)
     if args.frames < 1 or args.warmup < 0:

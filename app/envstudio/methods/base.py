@@ -41,6 +41,8 @@ class Method(ABC):
     title: ClassVar[str]
     summary: ClassVar[str]
     parameters: ClassVar[tuple[Parameter, ...]] = ()
+    #: The image builds up over frames (a frame is one batch of an accumulation).
+    progressive: ClassVar[bool] = False
 
     def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary):
         self.ctx = ctx

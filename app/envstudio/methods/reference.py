@@ -141,6 +141,7 @@ class ReferenceMethod(Method):
     name = "reference"
     title = "Reference (Monte Carlo)"
     summary = "Rendering equation per pixel by MIS importance sampling, accumulated to convergence."
+    progressive = True
     parameters = (
         Parameter(
             "model",
