@@ -1,4 +1,4 @@
-"""The saved-reference cache stays within its size limit, least recently used first."""
+"""The saved-reference cache: keyed by the estimator's shaders, within its size limit."""
 
 from __future__ import annotations
 
@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from envstudio.errors import ParameterError
+from envstudio.gpu.programs import read_shader
+from envstudio.render import reference_cache
 from envstudio.render.reference_cache import cache_limit_bytes, load_state, prune, save_state
+from envstudio.render.session import RenderSession
+from envstudio.scene.environment import Environment
+from test_render_gl import sphere_scene
 
 MB = 2**20
 
@@ -53,3 +58,22 @@ def test_a_bad_limit_is_one_line_naming_the_variable(monkeypatch, value):
     monkeypatch.setenv("ENVSTUDIO_CACHE_MAX_MB", value)
     with pytest.raises(ParameterError, match=f"ENVSTUDIO_CACHE_MAX_MB='{value}': expected"):
         cache_limit_bytes()
+
+
+def test_the_key_follows_the_estimators_shaders_and_their_includes_only(gl_ctx, monkeypatch):
+    session = RenderSession(sphere_scene(Environment.constant([1.0, 1.0, 1.0])), ctx=gl_ctx)
+    reference = session.method("reference")
+
+    def key_with_edited(edited: str | None):
+        def read(name: str) -> str:
+            return read_shader(name) + ("// edited\n" if name == edited else "")
+
+        monkeypatch.setattr(reference_cache, "read_shader", read)
+        return reference_cache.cache_path(session, reference, (32, 32))
+
+    base = key_with_edited(None)
+    for included in ("common/sobol.glsl", "reference/trace.glsl", "reference/merge_batch.glsl"):
+        assert key_with_edited(included) != base, included
+    for unrelated in ("common/colormap.glsl", "kautz/kautz.glsl", "common/spheremap.glsl"):
+        assert key_with_edited(unrelated) == base, unrelated
+    session.release()

@@ -9,7 +9,9 @@ against the same reference costs nothing. The key is a SHA-256 of everything
 the estimate depends on: the environment's pixels, every node's geometry,
 transform, role and colour, the camera matrices, the image size, the
 reference's parameters except the stopping rules (``max_samples``,
-``tolerance``), and the text of the shaders that compute it. The cache folder
+``tolerance``), and the text of the shaders that compute it: the reference's
+programs and every file they include (:func:`estimate_shader_files`), so an
+edit to another method's shader leaves saved accumulations valid. The cache folder
 is ``$ENVSTUDIO_CACHE_DIR``, else ``$XDG_CACHE_HOME/envstudio``, else
 ``~/.cache/envstudio``.
 
@@ -32,16 +34,23 @@ from pathlib import Path
 import numpy as np
 
 from envstudio.errors import ParameterError
+from envstudio.gpu.programs import read_shader
+from envstudio.gpu.shader_source import preprocess
 from envstudio.io.atomic import atomic_path
 from envstudio.methods.reference import ReferenceMethod
 from envstudio.methods.sample_allocation import SampleAllocation
 from envstudio.render.session import RenderSession
-from envstudio.resources import shader_root
 
 SAVE_INTERVAL_S = 60.0
 DEFAULT_LIMIT_MB = 2048.0
 STOPPING_RULES = ("max_samples", "tolerance")
-SHADER_FOLDERS = ("common", "reference")
+#: The reference's programs: the estimator, the batch merge, and the depth prepass
+#: (which picks the pixels that get samples).
+ESTIMATE_PROGRAMS = (
+    "reference/accumulate.glsl",
+    "reference/merge_batch.glsl",
+    "reference/resolve.glsl",
+)
 
 
 def cache_dir() -> Path:
@@ -72,11 +81,19 @@ def cache_path(session: RenderSession, reference: ReferenceMethod, size: tuple[i
     add(camera.view_matrix(), camera.projection_matrix(size[0] / size[1]), np.asarray(size))
     values = {k: v for k, v in reference.values.as_dict().items() if k not in STOPPING_RULES}
     digest.update(repr(sorted(values.items())).encode())
-    for folder in SHADER_FOLDERS:
-        for path in sorted((shader_root() / folder).glob("*.glsl")):
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
+    for name in estimate_shader_files():
+        digest.update(name.encode())
+        digest.update(read_shader(name).encode())
     return cache_dir() / "reference" / f"{digest.hexdigest()[:32]}.npz"
+
+
+def estimate_shader_files() -> list[str]:
+    """Files (relative to the shader root) of :data:`ESTIMATE_PROGRAMS` and all they include."""
+    files: list[str] = []
+    for program in ESTIMATE_PROGRAMS:
+        _, source_map = preprocess(program, "COMPUTE_SHADER", read_shader)
+        files += [name for name in source_map.files if name not in files]
+    return sorted(files)
 
 
 def load_state(path: Path) -> dict[str, np.ndarray] | None:
