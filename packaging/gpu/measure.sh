@@ -27,11 +27,16 @@ fi
 if [ "$part" = converge ] || [ "$part" = all ]; then
 # time to a converged reference at 256² (#3); --resume keeps the accumulation in
 # .gpu-cache/ (git-ignored, kept on a warm device between calls), so a run cut
-# by CONVERGE_LIMIT continues in the next `converge` call and counts all its seconds
+# by CONVERGE_LIMIT continues in the next `converge` call and counts all its seconds.
+# The saved accumulations also come back in $out/cache/: copied into the
+# workstation's .gpu-cache/reference/ and carried (carry .gpu-cache), they let a
+# run continue on a fresh machine, in a later session (README.md beside this file).
 export ENVSTUDIO_CACHE_DIR="$PWD/.gpu-cache"
-for scene in studio room; do
+for scene in ${CONVERGE_SCENES:-studio room}; do
     es bench --converge --resume --scene "$scene" --size 256x256 --param max_samples=10000000 \
         --time-limit "${CONVERGE_LIMIT:-200}" --json "$out/converge_$scene.json" \
         | tee "$out/converge_$scene.txt"
+    mkdir -p "$out/cache"
+    cp "$ENVSTUDIO_CACHE_DIR"/reference/*.npz "$out/cache/"
 done
 fi
