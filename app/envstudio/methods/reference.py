@@ -18,10 +18,11 @@ m_i × ``samples`` estimates per batch, m_i ∝ its standard deviation (Neyman
 allocation, methods/sample_allocation.py). Each batch mean keeps weight 1, and
 each pixel's Sobol sequence continues at its own count.
 
-Convergence is judged by the successive-half criterion: at every doubling of
-the batch count the estimate I_n is compared with I_{n/2}; the reference is
-converged when RMS(I_n − I_{n/2}) / RMS(I_n) over the reflector pixels falls
-below ``tolerance`` (0.1 % by default). The accumulation restarts whenever the
+Convergence is judged by the successive-half criterion: four times per
+doubling of the batch count n (:func:`is_checkpoint`) the estimate I_n is
+compared with I_{n/2}; the reference is converged when RMS(I_n − I_{n/2}) /
+RMS(I_n) over the reflector pixels falls below ``tolerance`` (0.1 % by
+default). The accumulation restarts whenever the
 camera, the parameters, the environment, the transforms or the size change.
 
 Shaders: shaders/reference/accumulate.glsl (estimator), sampling.glsl,
@@ -54,7 +55,8 @@ from envstudio.methods.tracing import TraceData
 MODELS = ("phong", "microfacet")
 SEQUENCES = ("random", "sobol")
 ENVIRONMENT_SAMPLING = ("auto", "global", "lobe")
-FIT_CHECKS = 4
+#: The projection fits the checks whose samples are within this factor of the last.
+FIT_SPAN = 10.0
 FLATTEST_SLOPE = -0.1
 ADAPT_FROM_BATCHES = 8
 
@@ -70,13 +72,13 @@ class ConvergenceStatus:
     samples : int
         Estimates per pixel (batches × samples per batch).
     rms_change : float or None
-        RMS(I_n − I_{n/2}) / RMS(I_n) at the last doubling (None before the second).
+        RMS(I_n − I_{n/2}) / RMS(I_n) at the last check (None before the first).
     checked_samples : int
-        ``samples`` at that doubling (0 before it).
+        ``samples`` at that check (0 before it).
     converged : bool
         ``rms_change`` is below the tolerance.
     checks : list of dict
-        Every doubling since the restart: ``samples``, ``change`` and
+        Every check since the restart: ``samples``, ``change`` and
         ``seconds`` (wall time since ``started``).
     started : float
         ``time.perf_counter()`` at the restart.
@@ -243,7 +245,8 @@ class ReferenceMethod(Method):
         self._batch_fbo: moderngl.Framebuffer | None = None
         self._depth_fbo: moderngl.Framebuffer | None = None
         self._key: tuple | None = None
-        self._snapshot: npt.NDArray[np.float64] | None = None
+        # estimates at earlier checkpoints, by batch count, until no check needs them
+        self._snapshots: dict[int, npt.NDArray[np.float32]] = {}
         self._pending_state: dict[str, npt.NDArray] | None = None
         self._band_start = 0
         self._row_work: npt.NDArray[np.float64] | None = None
@@ -330,8 +333,12 @@ class ReferenceMethod(Method):
         self._merge_batch()
         self.status.batches += 1
         self.status.samples = self._mean_samples()
-        if self.status.batches >= 2 and self.status.batches & (self.status.batches - 1) == 0:
+        batches = self.status.batches
+        if is_checkpoint(batches):
             self._check_convergence()
+        doubling = batches & (batches - 1) == 0
+        if self.values["adaptive"] and doubling and batches >= ADAPT_FROM_BATCHES:
+            self._reallocate()
 
     def _prepare(self, scene: GpuScene, frame: FrameInputs) -> None:
         if self._tables_revision != scene.environment_revision:
@@ -360,7 +367,7 @@ class ReferenceMethod(Method):
             self._batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
             self.status = ConvergenceStatus()
             self._set_allocation(SampleAllocation.plain((frame.size[1], frame.size[0])))
-            self._snapshot = None
+            self._snapshots = {}
             self._band_start = 0
             if self._pending_state is not None:
                 self._restore(self._pending_state, frame.size)
@@ -536,11 +543,15 @@ class ReferenceMethod(Method):
         self._allocation.write(np.ascontiguousarray(texels).tobytes())
 
     def _check_convergence(self) -> None:
-        current = self.estimate().astype(np.float64)
+        """Keep this checkpoint's estimate; compare it with the one at half the batches."""
+        batches = self.status.batches
+        current = self.estimate()
         mask = self.coverage()
-        if self._snapshot is not None and mask.any():
-            diff = current[mask] - self._snapshot[mask]
-            norm = np.sqrt(np.mean(current[mask] ** 2))
+        half = self._snapshots.get(batches // 2) if batches % 2 == 0 else None
+        if half is not None and mask.any():
+            now = current[mask].astype(np.float64)
+            diff = now - half[mask]
+            norm = np.sqrt(np.mean(now**2))
             # an all-black estimate has not converged to anything: never call it converged
             change = float(np.sqrt(np.mean(diff**2)) / norm) if norm > 0 else float("inf")
             self.status.rms_change = change
@@ -553,9 +564,9 @@ class ReferenceMethod(Method):
                 }
             )
             self.status.converged = change < float(self.values["tolerance"])
-        self._snapshot = current
-        if self.values["adaptive"] and self.status.batches >= ADAPT_FROM_BATCHES:
-            self._reallocate()
+        # later checks compare with later halves
+        self._snapshots = {b: e for b, e in self._snapshots.items() if b > batches // 2}
+        self._snapshots[batches] = current
 
     # -- saving and resuming ----------------------------------------------------------------
 
@@ -564,9 +575,10 @@ class ReferenceMethod(Method):
 
         Keys: ``sum``, ``sum_sq`` ((h, w, 4) float32, row 0 at the top),
         ``batches``, ``checked_samples`` (int64), ``rms_change`` (float64, NaN
-        before the first check), ``snapshot`` ((h, w, 3) float64 estimate of
-        the last doubling, or an empty array), ``checks`` ((k, 3) float64:
-        samples, change, seconds of every doubling), ``seconds`` (float64
+        before the first check), ``snapshots`` ((k, h, w, 3) float32 estimates
+        at the checkpoints later checks compare with) and ``snapshot_batches``
+        ((k,) int64, their batch counts), ``checks`` ((k, 3) float64:
+        samples, change, seconds of every check), ``seconds`` (float64
         wall time spent accumulating, over all the runs that built it),
         and the sample allocation (:meth:`SampleAllocation.as_arrays`).
         """
@@ -579,7 +591,10 @@ class ReferenceMethod(Method):
             "batches": np.int64(self.status.batches),
             "checked_samples": np.int64(self.status.checked_samples),
             "rms_change": np.float64(np.nan if change is None else change),
-            "snapshot": np.zeros(0) if self._snapshot is None else self._snapshot,
+            "snapshots": np.asarray(list(self._snapshots.values()), np.float32).reshape(
+                -1, *total.shape[:2], 3
+            ),
+            "snapshot_batches": np.asarray(list(self._snapshots), np.int64),
             "checks": np.asarray(checks, np.float64).reshape(-1, 3),
             "seconds": np.float64(self.status.elapsed()),
             **self._sample_allocation.as_arrays(),
@@ -611,8 +626,7 @@ class ReferenceMethod(Method):
         if not np.isnan(change):
             self.status.rms_change = change
             self.status.converged = change < float(self.values["tolerance"])
-        snapshot = state["snapshot"]
-        self._snapshot = snapshot.astype(np.float64) if snapshot.size else None
+        self._snapshots = _saved_snapshots(state, batches)
         checks = state.get("checks", np.zeros((0, 3)))
         self.status.checks = [
             {"samples": int(n), "change": float(change), "seconds": float(seconds)}
@@ -656,6 +670,32 @@ class ReferenceMethod(Method):
         self._key = self._trace_key = None
 
 
+def is_checkpoint(batches: int) -> bool:
+    """Whether the estimate is kept (and checked against half the batches) at ``batches``.
+
+    Checkpoints are 2, 3 and c 2^k for c in 4 … 7: four per doubling, each
+    with its half among them (even ones), so the check runs at most a quarter
+    octave after the change first falls below the tolerance, not a whole one.
+    """
+    return batches >= 2 and batches & ((1 << max(batches.bit_length() - 3, 0)) - 1) == 0
+
+
+def _saved_snapshots(state: dict[str, npt.NDArray], batches: int) -> dict[int, npt.NDArray]:
+    """Checkpoint estimates of a saved state, by batch count.
+
+    States saved before session 5 hold one ``snapshot``: the estimate at the
+    last doubling, the largest power of two up to ``batches``.
+    """
+    if "snapshots" in state:
+        return {
+            int(b): e.astype(np.float32)
+            for b, e in zip(state["snapshot_batches"], state["snapshots"], strict=True)
+        }
+    if state["snapshot"].size:
+        return {1 << (batches.bit_length() - 1): state["snapshot"].astype(np.float32)}
+    return {}
+
+
 def _batch_variance(
     total: npt.NDArray[np.float32], squares: npt.NDArray[np.float32]
 ) -> npt.NDArray[np.float32]:
@@ -670,14 +710,16 @@ def _batch_variance(
 def project_convergence(checks: list[dict], tolerance: float) -> dict | None:
     """Samples and seconds to reach ``tolerance``, extrapolated from the last checks.
 
-    Fits log(change) = a + s log(samples) by least squares over the last
-    :data:`FIT_CHECKS` checks (s = −1/2 for plain Monte Carlo, steeper for the
-    Sobol sequence on smooth integrands), and the time per sample over the same span.
+    Fits log(change) = a + s log(samples) by least squares over the checks
+    whose samples are within :data:`FIT_SPAN` of the last (the last four
+    where checks came at doublings; s = −1/2 for plain Monte Carlo, steeper
+    for the Sobol sequence on smooth integrands), and the time per sample over
+    the same span.
 
     Parameters
     ----------
     checks : list of dict
-        ``samples``, ``change`` and ``seconds`` at successive doublings
+        ``samples``, ``change`` and ``seconds`` at successive checks
         (:attr:`ConvergenceStatus.checks`).
     tolerance : float
         The relative half-change to reach.
@@ -689,7 +731,7 @@ def project_convergence(checks: list[dict], tolerance: float) -> dict | None:
         the fitted change reaches the tolerance; None with fewer than two
         checks or a slope flatter than :data:`FLATTEST_SLOPE`.
     """
-    tail = checks[-FIT_CHECKS:]
+    tail = [c for c in checks if c["samples"] * FIT_SPAN >= checks[-1]["samples"]] if checks else []
     if len(tail) < 2:
         return None
     log_n = np.log([c["samples"] for c in tail])
