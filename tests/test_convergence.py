@@ -94,6 +94,43 @@ def test_a_time_limit_stops_short_and_projects(gl_ctx):
     session.release()
 
 
+def test_a_larger_budget_or_another_tolerance_continues_the_accumulation(gl_ctx):
+    def sphere():
+        session = RenderSession(
+            sphere_scene(Environment(smooth_environment()), rings=64), ctx=gl_ctx
+        )
+        session.renderer.display["background"] = False
+        method = session.method("reference")
+        method.values.update({"trace": False, "samples": 16, "tolerance": 1e-5})
+        return session, method
+
+    session, method = sphere()
+    method.values["max_samples"] = 64
+    while not method.finished():
+        session.render_offscreen(method, (32, 32))
+    assert method.status.batches == 4 and "budget spent" in method.status_line()
+    method.values["max_samples"] = 10_000
+    method.values["samples_per_draw"] = 3  # six draws per batch from here on, one short
+    session.render_offscreen(method, (32, 32))
+    assert method.status.batches == 5, "the larger budget restarted the accumulation"
+    # the last check (4 batches against 2) is judged again under each tolerance at once
+    change = method.status.rms_change
+    method.values["tolerance"] = 2 * change
+    session.render_offscreen(method, (32, 32))
+    assert method.status.converged and method.status.batches == 5
+    method.values["tolerance"] = 1e-5
+    session.render_offscreen(method, (32, 32))
+    assert not method.status.converged and method.status.batches == 6
+    continued = method.estimate()
+    session.release()
+
+    session, method = sphere()
+    for _ in range(6):
+        session.render_offscreen(method, (32, 32))
+    np.testing.assert_allclose(continued, method.estimate(), rtol=1e-5, atol=1e-6)
+    session.release()
+
+
 @pytest.mark.parametrize("adaptive", [False, True])
 def test_a_resumed_convergence_run_continues_the_checks_and_the_estimate(gl_ctx, adaptive):
     def run(max_samples: int, resume: bool):

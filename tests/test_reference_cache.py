@@ -77,3 +77,17 @@ def test_the_key_follows_the_estimators_shaders_and_their_includes_only(gl_ctx, 
     for unrelated in ("common/colormap.glsl", "kautz/kautz.glsl", "common/spheremap.glsl"):
         assert key_with_edited(unrelated) == base, unrelated
     session.release()
+
+
+def test_the_key_leaves_out_only_when_to_stop_and_how_batches_are_drawn(gl_ctx):
+    session = RenderSession(sphere_scene(Environment.constant([1.0, 1.0, 1.0])), ctx=gl_ctx)
+    reference = session.method("reference")
+    base = reference_cache.cache_path(session, reference, (32, 32))
+    reference.values.update({"max_samples": 5, "tolerance": 0.01, "samples_per_draw": 2})
+    assert reference_cache.cache_path(session, reference, (32, 32)) == base
+    for name, value in (("samples", 4), ("kd", 0.5), ("sequence", "random")):
+        default = reference.values[name]
+        reference.values[name] = value
+        assert reference_cache.cache_path(session, reference, (32, 32)) != base, name
+        reference.values[name] = default
+    session.release()

@@ -114,6 +114,38 @@ def test_a_batch_past_llvmpipes_loop_limit_is_drawn_in_chunks_and_stays_unbiased
     session.release()
 
 
+def counted(obj, name: str) -> list:
+    """Count the calls of ``obj.name`` from now on (the list grows by one per call)."""
+    calls, original = [], getattr(obj, name)
+
+    def call(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    setattr(obj, name, call)
+    return calls
+
+
+def test_a_batch_split_into_draws_adds_up_the_same_samples(gl_ctx):
+    # 7 samples per batch in draws of 1, of 3 (the last one short) and in one draw
+    estimates, draws = [], []
+    for per_draw in (0, 1, 3):
+        session = RenderSession(sphere_scene(Environment(smooth_environment())), ctx=gl_ctx)
+        method = session.method("reference")
+        calls = counted(method, "_draw_reflectors")
+        converge(session, 2, kd=0.5, phong_exponent=30.0, samples=7, samples_per_draw=per_draw)
+        estimates.append(method.estimate())
+        draws.append(len(calls))
+        covered = method.coverage()
+        session.release()
+    # each frame also draws the reflectors for its depth prepass and its resolve pass
+    assert [n - 2 * 2 for n in draws] == [2 * 1, 2 * 7, 2 * 3]
+    whole, ones, threes = estimates
+    assert whole[covered].min() > 0.05
+    np.testing.assert_allclose(ones, whole, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(threes, whole, rtol=1e-5, atol=1e-6)
+
+
 # Four lamps on a black 64 x 128 map: one across the u = 0 seam (+Z, what the
 # sphere's centre reflects), one beside it, a ring around the +Y pole, and the
 # brightest behind the sphere, where no reflection sees it.

@@ -1,7 +1,7 @@
 #!/bin/sh
 # The GPU numbers of issues #3 and #4, run on the GPU server from the checkout
 # root after prepare.sh (the device tool: carry .gl and .whl). Writes JSON and
-# text reports to $OUT (default ./gpu-results). Usage: measure.sh [timings|converge|all]
+# text reports to $OUT (default ./gpu-results). Usage: measure.sh [timings|draws|converge|all]
 # (one device call is limited to 10 minutes: run `timings` and `converge` apart).
 set -eu
 part=${1:-all}
@@ -24,17 +24,27 @@ for mips in false true; do
         | tee "$out/dynamic_cross_$mips.txt"
 done
 fi
+if [ "$part" = draws ] || [ "$part" = all ]; then
+# the reference's batch in one draw (0) or in draws of k samples per pixel: about
+# 10 000 reflector pixels leave a large GPU mostly idle, more draws in flight may not
+for k in 0 1 2 4 8; do
+    es bench --scene studio --methods reference --size 256x256 --param samples_per_draw=$k \
+        --json "$out/draws_$k.json" | tee "$out/draws_$k.txt"
+done
+fi
 if [ "$part" = converge ] || [ "$part" = all ]; then
 # time to a converged reference at 256² (#3); --resume keeps the accumulation in
 # .gpu-cache/ (git-ignored, kept on a warm device between calls), so a run cut
 # by CONVERGE_LIMIT continues in the next `converge` call and counts all its seconds.
+# CONVERGE_PARAMS adds --param options that leave the estimate and its saved key
+# alone, e.g. "--param samples_per_draw=2" (the fastest of `draws`).
 # The saved accumulations also come back in $out/cache/: copied into the
 # workstation's .gpu-cache/reference/ and carried (carry .gpu-cache), they let a
 # run continue on a fresh machine, in a later session (README.md beside this file).
 export ENVSTUDIO_CACHE_DIR="$PWD/.gpu-cache"
 for scene in ${CONVERGE_SCENES:-studio room}; do
     es bench --converge --resume --scene "$scene" --size 256x256 --param max_samples=10000000 \
-        --time-limit "${CONVERGE_LIMIT:-200}" --json "$out/converge_$scene.json" \
+        --time-limit "${CONVERGE_LIMIT:-200}" ${CONVERGE_PARAMS:-} --json "$out/converge_$scene.json" \
         | tee "$out/converge_$scene.txt"
     mkdir -p "$out/cache"
     cp "$ENVSTUDIO_CACHE_DIR"/reference/*.npz "$out/cache/"

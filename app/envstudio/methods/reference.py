@@ -23,7 +23,10 @@ doubling of the batch count n (:func:`is_checkpoint`) the estimate I_n is
 compared with I_{n/2}; the reference is converged when RMS(I_n − I_{n/2}) /
 RMS(I_n) over the reflector pixels falls below ``tolerance`` (0.1 % by
 default). The accumulation restarts whenever the
-camera, the parameters, the environment, the transforms or the size change.
+camera, the parameters, the environment, the transforms or the size change;
+the parameters that only decide when to stop and how a batch is split into
+draws (:data:`SCHEDULING_PARAMETERS`) do not restart it: a larger budget or a
+lower tolerance continues where the run stopped.
 
 Shaders: shaders/reference/accumulate.glsl (estimator), sampling.glsl,
 radiance.glsl, resolve.glsl.
@@ -59,6 +62,10 @@ ENVIRONMENT_SAMPLING = ("auto", "global", "lobe")
 FIT_SPAN = 10.0
 FLATTEST_SLOPE = -0.1
 ADAPT_FROM_BATCHES = 8
+#: Parameters that decide when to stop and how a batch is split into draws, not
+#: what is estimated: changing one continues the accumulation, and the saved
+#: accumulations' keys leave them out (render/reference_cache.py).
+SCHEDULING_PARAMETERS = ("max_samples", "tolerance", "samples_per_draw")
 
 
 @dataclass
@@ -210,6 +217,18 @@ class ReferenceMethod(Method):
             "its standard error (more where the image is noisy).",
         ),
         Parameter(
+            "samples_per_draw",
+            "int",
+            0,
+            0,
+            256 * MAX_MULTIPLIER,
+            "spp",
+            "Estimates a pixel adds per draw call; a batch takes as many draws as it needs. "
+            "0: the whole batch in one draw on GPUs, 32 on software renderers (their loop limit, "
+            "which also caps other values). Smaller chunks keep more draws in flight on a GPU; "
+            "the samples are the same.",
+        ),
+        Parameter(
             "max_samples",
             "int",
             8192,
@@ -356,7 +375,7 @@ class ReferenceMethod(Method):
             frame.size,
             frame.view.tobytes(),
             frame.projection.tobytes(),
-            self.values.revision,
+            tuple(v for k, v in self.values.as_dict().items() if k not in SCHEDULING_PARAMETERS),
             scene.environment_revision,
             scene.geometry_revision,
         )
@@ -372,6 +391,7 @@ class ReferenceMethod(Method):
             if self._pending_state is not None:
                 self._restore(self._pending_state, frame.size)
                 self._pending_state = None
+        self._judge_convergence()  # the tolerance may have changed
 
     def _depth_prepass(self, frame: FrameInputs) -> None:
         """Nearest surface depth per pixel: only the visible reflector surface is shaded.
@@ -446,15 +466,16 @@ class ReferenceMethod(Method):
         self.ctx.depth_func = "<"
 
     def _chunk_samples(self) -> int:
-        """Estimates a pixel draws per draw call: the whole batch, or on llvmpipe a chunk.
+        """Estimates a pixel draws per draw call: ``samples_per_draw``, else the whole batch.
 
         llvmpipe silently ends an invocation's loops after 65 535 iterations in
-        all (:data:`SOFTWARE_SAMPLES_PER_BATCH`), so there a batch of more
-        samples is drawn in several draws; the batch target adds them up.
+        all (:data:`SOFTWARE_SAMPLES_PER_BATCH`), so there a chunk is at most
+        that many samples. The batch target adds the chunks up.
         """
+        chunk = int(self.values["samples_per_draw"]) or int(self.values["samples"]) * MAX_MULTIPLIER
         if is_software_renderer(self.ctx):
-            return SOFTWARE_SAMPLES_PER_BATCH
-        return int(self.values["samples"]) * MAX_MULTIPLIER
+            return min(chunk, SOFTWARE_SAMPLES_PER_BATCH)
+        return chunk
 
     def _merge_batch(self) -> None:
         """Add the finished batch's mean per pixel (and its square) to the sums; clear it."""
@@ -563,10 +584,15 @@ class ReferenceMethod(Method):
                     "seconds": self.status.elapsed(),
                 }
             )
-            self.status.converged = change < float(self.values["tolerance"])
+            self._judge_convergence()
         # later checks compare with later halves
         self._snapshots = {b: e for b, e in self._snapshots.items() if b > batches // 2}
         self._snapshots[batches] = current
+
+    def _judge_convergence(self) -> None:
+        """Converged: the last check's change is below the current tolerance."""
+        change = self.status.rms_change
+        self.status.converged = change is not None and change < float(self.values["tolerance"])
 
     # -- saving and resuming ----------------------------------------------------------------
 
@@ -625,7 +651,7 @@ class ReferenceMethod(Method):
         self.status.checked_samples = int(state["checked_samples"])
         if not np.isnan(change):
             self.status.rms_change = change
-            self.status.converged = change < float(self.values["tolerance"])
+            self._judge_convergence()
         self._snapshots = _saved_snapshots(state, batches)
         checks = state.get("checks", np.zeros((0, 3)))
         self.status.checks = [

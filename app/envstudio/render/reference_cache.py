@@ -8,12 +8,12 @@ continues from it: an interrupted run resumes, and comparing another method
 against the same reference costs nothing. The key is a SHA-256 of everything
 the estimate depends on: the environment's pixels, every node's geometry,
 transform, role and colour, the camera matrices, the image size, the
-reference's parameters except the stopping rules (``max_samples``,
-``tolerance``), and the text of the shaders that compute it: the reference's
-programs and every file they include (:func:`estimate_shader_files`), so an
-edit to another method's shader leaves saved accumulations valid. The cache folder
-is ``$ENVSTUDIO_CACHE_DIR``, else ``$XDG_CACHE_HOME/envstudio``, else
-``~/.cache/envstudio``.
+reference's parameters except those that only decide when to stop and how a
+batch is drawn (``SCHEDULING_PARAMETERS``), and the text of the shaders that
+compute it: the reference's programs and every file they include
+(:func:`estimate_shader_files`), so an edit to another method's shader leaves
+saved accumulations valid. The cache folder is ``$ENVSTUDIO_CACHE_DIR``, else
+``$XDG_CACHE_HOME/envstudio``, else ``~/.cache/envstudio``.
 
 Keys change with every edit of a shader or a parameter, so old files are never
 read again; after each save the least recently used files are deleted until
@@ -37,13 +37,12 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import preprocess
 from envstudio.io.atomic import atomic_path
-from envstudio.methods.reference import ReferenceMethod
+from envstudio.methods.reference import SCHEDULING_PARAMETERS, ReferenceMethod
 from envstudio.methods.sample_allocation import SampleAllocation
 from envstudio.render.session import RenderSession
 
 SAVE_INTERVAL_S = 60.0
 DEFAULT_LIMIT_MB = 2048.0
-STOPPING_RULES = ("max_samples", "tolerance")
 #: The reference's programs: the estimator, the batch merge, and the depth prepass
 #: (which picks the pixels that get samples).
 ESTIMATE_PROGRAMS = (
@@ -79,7 +78,7 @@ def cache_path(session: RenderSession, reference: ReferenceMethod, size: tuple[i
         add(node.transform.matrix(), np.asarray(node.color, np.float64))
     camera = session.camera
     add(camera.view_matrix(), camera.projection_matrix(size[0] / size[1]), np.asarray(size))
-    values = {k: v for k, v in reference.values.as_dict().items() if k not in STOPPING_RULES}
+    values = {k: v for k, v in reference.values.as_dict().items() if k not in SCHEDULING_PARAMETERS}
     digest.update(repr(sorted(values.items())).encode())
     for name in estimate_shader_files():
         digest.update(name.encode())
