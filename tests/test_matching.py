@@ -19,6 +19,14 @@ class _Bias(Method):
         raise NotImplementedError
 
 
+class _BiasWithMode(_Bias):
+    name = "bias_mode"
+    parameters = (
+        *_Bias.parameters,
+        Parameter("lod_mode", "choice", "bias", choices=("bias", "level")),
+    )
+
+
 class _Phong(Method):
     name, title, summary = "phong", "N", "exponent method"
     parameters = (
@@ -57,3 +65,13 @@ def test_same_kind_copies_values():
     a.values.update({"phong_exponent": 42.0, "kd": 0.3})
     assert match_glossiness(b, a, 256) is None
     assert b.values["phong_exponent"] == 42.0 and b.values["kd"] == 0.3
+
+
+@pytest.mark.parametrize("mode", ["bias", "level"])
+def test_the_match_says_when_the_hardware_lod_adds_to_b(mode):
+    mip, phong = _BiasWithMode(None, None), _Phong(None, None)
+    mip.values["lod_mode"] = mode
+    caveat = "lod_mode=bias adds the screen-space LOD"
+    for line in (match_glossiness(mip, phong, 64), match_glossiness(phong, mip, 64)):
+        assert (caveat in line) == (mode == "bias")
+    assert caveat not in match_glossiness(_Bias(None, None), phong, 64)

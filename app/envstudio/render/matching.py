@@ -21,6 +21,18 @@ def _clamped(method: Method, name: str, value: float) -> float:
     return float(np.clip(value, declared.minimum, declared.maximum))
 
 
+def _hardware_lod_caveat(mip_method: Method) -> str:
+    """What the match leaves out when b is a bias on the hardware's LOD (seed 000 §5.2).
+
+    The fit relates N to the mip level b itself. Under ``lod_mode=bias`` the lookup reads
+    level b plus the screen-space LOD, which curved reflectors make several levels large
+    (docs/kautz: the studio bunny at 256² drops from 20.6 dB to 5.4 dB).
+    """
+    if "lod_mode" not in mip_method.values or mip_method.values["lod_mode"] != "bias":
+        return ""
+    return "; lod_mode=bias adds the screen-space LOD to b (lod_mode=level reads level b)"
+
+
 def match_glossiness(target: Method, source: Method, cube_size: int) -> str | None:
     """Give ``target`` the look of ``source``: shared values copied, b ↔ N converted.
 
@@ -53,11 +65,13 @@ def match_glossiness(target: Method, source: Method, cube_size: int) -> str | No
         fitted = float(lod_bias_for_exponent(exponent, cube_size))
         target.values["lod_bias"] = b = _clamped(target, "lod_bias", fitted)
         clamp = "" if b == fitted else f" (fit {fitted:.3f}, clamped)"
-        return f"b = {b:.3f} matched to N = {exponent:g} on a {cube_size}² cube{clamp}"
+        line = f"b = {b:.3f} matched to N = {exponent:g} on a {cube_size}² cube{clamp}"
+        return line + _hardware_lod_caveat(target)
     if source_b and "phong_exponent" in target.values:
         bias = float(source.values["lod_bias"])
         fitted = float(exponent_for_lod_bias(bias, cube_size))
         target.values["phong_exponent"] = n = _clamped(target, "phong_exponent", fitted)
         clamp = "" if n == fitted else f" (fit {fitted:.1f}, clamped)"
-        return f"N = {n:.1f} matched to b = {bias:g} on a {cube_size}² cube{clamp}"
+        line = f"N = {n:.1f} matched to b = {bias:g} on a {cube_size}² cube{clamp}"
+        return line + _hardware_lod_caveat(source)
     return None
