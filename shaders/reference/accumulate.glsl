@@ -25,13 +25,10 @@
 #include "common/sobol.glsl"
 #include "common/fresnel.glsl"
 #include "reference/sampling.glsl"
+#include "reference/material.glsl"
 #include "reference/radiance.glsl"
 
 uniform vec3 u_camera_position;
-uniform int u_brdf_model;
-uniform float u_kd;
-uniform float u_fresnel;
-uniform float u_phong_exponent;
 uniform int u_samples;
 uniform int u_frame;
 
@@ -118,7 +115,7 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
 
 // One MIS sample pair for the microfacet BRDF times the cosine.
 vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
-    float alpha = sqrt(2.0 / (4.0 * u_phong_exponent + 2.0));
+    float alpha = microfacet_alpha();
     float n_dot_v = max(dot(n, v), 1e-4);
     float F_view = schlick_fresnel(u_fresnel, n_dot_v);
     // Without a diffuse term, environment samples come from the cap about the
@@ -171,6 +168,8 @@ uniform int u_chunk_first;
 uniform int u_chunk_samples;
 
 void main() {
+    // the face normal at the pixel centre (derivatives before any divergent control flow)
+    vec3 centre_face = cross(dFdx(v_world_position), dFdy(v_world_position));
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     vec3 batch = vec3(0.0);
     int multiplier = 1;
@@ -185,20 +184,35 @@ void main() {
     int count = u_samples * multiplier;
     int last = min(count, u_chunk_first + u_chunk_samples);
     if (last <= u_chunk_first) discard;  // this pixel's batch ended in an earlier chunk
+    g_path_pixel = pixel;
+    int taken = 0;
     for (int i = u_chunk_first; i < last; ++i) {
         // With the pixel filter each sample sees another point of the pixel's
-        // footprint (box filter, stratified): the anti-aliased image that
-        // mip-mapped lookups approximate. Without it, the pixel centre only.
+        // footprint (box filter, stratified), the surface there found by a
+        // camera ray (footprint.glsl): the anti-aliased image that mip-mapped
+        // lookups approximate. Without it, the pixel centre only.
         draw_joint(pixel, uint(i));
-        vec2 offset = u_pixel_filter ? g_footprint - 0.5 : vec2(0.0);
-        vec3 p = interpolateAtOffset(v_world_position, offset);
-        vec3 n = normalize(interpolateAtOffset(v_world_normal, offset));
+        vec3 p = v_world_position;
+        vec3 n = normalize(v_world_normal);
+        vec3 g = centre_face;
+        if (u_pixel_filter && !footprint_surface(gl_FragCoord.xy + g_footprint - 0.5,
+                                                 u_camera_position, p, n, g)) {
+            continue;
+        }
+        ++taken;
         vec3 v = normalize(u_camera_position - p);
-        if (dot(n, v) < 0.0) n = -n;
+        // Two-sided: the side of the face the camera sees. A shading normal
+        // still turned away from the viewer (silhouettes of smooth-shaded
+        // meshes) reflects nothing, as in a path tracer's shading frame.
+        if (dot(g, v) < 0.0) n = -n;
+        if (dot(n, v) <= 0.0) continue;
+        g_path_sample = g_first_sample + uint(i);
+        g_path_stream = 0u;
         vec3 r = reflect(-v, n);
         batch += u_brdf_model == 0 ? sample_eq8(p, n, v, r, pixel, uint(i))
                                    : sample_microfacet(p, n, v, pixel, uint(i));
     }
-    f_batch = vec4(batch, float(last - u_chunk_first));
+    // count the footprint points on the reflectors only: the mean over the covered footprint
+    f_batch = vec4(batch, float(taken));
 }
 #endif

@@ -1,7 +1,8 @@
 // Incident radiance along a ray for the reference: the environment at
 // infinity (full-resolution lat-long, each texel constant over its solid
-// angle, as the brute-force sums of prefilter/brute_force.py assume), or, with TRACE_LOCAL = 1, the
-// scene's triangles traced first (reference/trace.glsl).
+// angle, as the brute-force sums of prefilter/brute_force.py assume), or, with
+// TRACE_LOCAL = 1, the scene's triangles traced first (reference/paths.glsl).
+// Needs reference/material.glsl and common/random.glsl.
 uniform sampler2D u_latlong;
 
 vec3 environment_radiance(vec3 l) {
@@ -11,6 +12,8 @@ vec3 environment_radiance(vec3 l) {
 }
 
 #include "reference/trace.glsl"
+#include "reference/paths.glsl"
+#include "reference/footprint.glsl"
 
 vec3 incident(vec3 p, vec3 n, vec3 l) {
 #if TRACE_LOCAL

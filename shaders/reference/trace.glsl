@@ -1,12 +1,12 @@
-// Ray tracing of the scene's triangles for the reference (local reflections,
-// self-occlusion, self-reflection). BVH layout of app/envstudio/core/bvh.py,
+// Ray tracing of the scene's triangles for the reference: closest hits
+// through a BVH (paths.glsl follows them: self-occlusion, local and
+// self-reflections; footprint.glsl finds the surface under the pixel). BVH layout of app/envstudio/core/bvh.py,
 // uploaded by app/envstudio/methods/tracing.py into two shader storage buffers
 // of vec4 (OpenGL 4.3; plain loads, where texelFetch went through the sampler):
 //   nodes:     2 vec4 per node: (min.xyz, right child or first triangle),
 //              (max.xyz, triangle count; 0 for interior nodes)
 //   triangles: 7 vec4 per triangle: v0, v1, v2, n0, n1, n2, (albedo.rgb, kind)
 //              kind 0 = local diffuse object, 1 = reflector
-#include "common/sh.glsl"
 
 #define TRACE_EDGE_EPSILON 1e-5
 // Traversal stack entries: methods/tracing.py sets the BVH's depth + 2, all the
@@ -19,8 +19,6 @@
 
 layout(std430, binding = 0) readonly buffer TraceNodes { vec4 trace_nodes[]; };
 layout(std430, binding = 1) readonly buffer TraceTriangles { vec4 trace_triangles[]; };
-uniform vec3 u_sh9[9];
-uniform float u_ray_offset;
 
 // Moller-Trumbore; returns t > 0 or -1, barycentrics in uv.
 float ray_triangle(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out vec2 uv) {
@@ -108,17 +106,12 @@ bool trace_closest(vec3 o, vec3 d, out float t_hit, out int tri_hit, out vec2 ba
     return tri_hit >= 0;
 }
 
-// Radiance arriving at p from direction l. Directions below the surface (the
-// part of the eq. 7 lobe under the horizon) are blocked by the surface itself:
-// no light arrives from inside the object (seed 000 eq. 1 integrates over the
-// hemisphere above the surface; without tracing the lobe is left whole, as the
-// prefiltered-map methods use it). A local object returns its diffuse radiance
-// albedo/pi * E_sh9(n) (as the frame draws it); a reflector hit continues as a
-// mirror bounce, traced again (up to u_trace_bounces hits, then black), so
-// self-reflections see the room and not the environment behind its walls. The
-// bound is a uniform so that no compiler unrolls the loop into one copy of the
-// traversal per bounce.
-uniform int u_trace_bounces;
+// Unit face normal of triangle tri (its winding's orientation).
+vec3 hit_face_normal(int tri) {
+    vec3 a = trace_triangles[7 * tri].xyz;
+    return normalize(cross(trace_triangles[7 * tri + 1].xyz - a,
+                           trace_triangles[7 * tri + 2].xyz - a));
+}
 
 // Interpolated vertex normal at a hit, or the face normal where the vertex
 // normals cancel (seams and tips of open meshes): a zero-length normal would
@@ -127,29 +120,5 @@ vec3 hit_shading_normal(int tri, vec2 uv) {
     vec3 n = (1.0 - uv.x - uv.y) * trace_triangles[7 * tri + 3].xyz
              + uv.x * trace_triangles[7 * tri + 4].xyz
              + uv.y * trace_triangles[7 * tri + 5].xyz;
-    if (dot(n, n) > 1e-8) return normalize(n);
-    vec3 a = trace_triangles[7 * tri].xyz;
-    return normalize(cross(trace_triangles[7 * tri + 1].xyz - a,
-                           trace_triangles[7 * tri + 2].xyz - a));
-}
-vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
-    if (dot(n, l) <= 0.0) return vec3(0.0);
-    vec3 origin = p + n * u_ray_offset;
-    vec3 direction = l;
-    for (int bounce = 0; bounce < u_trace_bounces; ++bounce) {
-        float t;
-        int tri;
-        vec2 uv;
-        if (!trace_closest(origin, direction, t, tri, uv)) return environment_radiance(direction);
-        vec3 hit_normal = hit_shading_normal(tri, uv);
-        if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
-        vec4 info = trace_triangles[7 * tri + 6];
-        if (info.a < 0.5) {
-            return info.rgb / 3.14159265358979
-                   * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
-        }
-        origin = origin + t * direction + hit_normal * u_ray_offset;
-        direction = reflect(direction, hit_normal);
-    }
-    return vec3(0.0);
+    return dot(n, n) > 1e-8 ? normalize(n) : hit_face_normal(tri);
 }

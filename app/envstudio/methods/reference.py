@@ -366,7 +366,7 @@ class ReferenceMethod(Method):
             self._tables = _EnvironmentTables(self.ctx, scene.scene.environment.radiance)
             self._tables_revision = scene.environment_revision
         geometry = (id(scene), scene.geometry_revision)
-        if self.values["trace"] and geometry != self._trace_key:
+        if self._uses_bvh() and geometry != self._trace_key:
             if self._trace is not None:
                 self._trace.release()
             self._trace = TraceData(self.ctx, scene)
@@ -420,20 +420,28 @@ class ReferenceMethod(Method):
             multipliers = self._sample_allocation.multipliers[::-1]
             self._row_work = (covered * multipliers).sum(axis=1, dtype=np.float64)
 
+    def _uses_bvh(self) -> bool:
+        """Whether the scene's triangles are traced: for local light or for the pixel footprint."""
+        return bool(self.values["trace"] or self.values["pixel_filter"])
+
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         trace = bool(self.values["trace"])
         require_version(self.ctx, 430, "method reference needs OpenGL 4.3 (storage buffers)")
         defines = {"TRACE_LOCAL": int(trace)}
-        if trace:
+        if self._uses_bvh():
             defines["TRACE_STACK"] = self._trace.stack_size
         program = self.programs.get("reference/accumulate.glsl", defines)
         scene = frame.scene
         scene.latlong.use(location=0)
         set_uniform(program, "u_latlong", 0)
         self._tables.bind(program, 1)
-        if trace:
+        if self._uses_bvh():
             self._trace.bind(program)
+        if trace:
             set_uniform(program, "u_sh9", scene.sh9)
+        view_projection = frame.projection.astype(np.float64) @ frame.view.astype(np.float64)
+        set_uniform(program, "u_inverse_view_projection", np.linalg.inv(view_projection))
+        set_uniform(program, "u_viewport", np.asarray(frame.size, np.float32))
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
         for name in ("kd", "fresnel", "phong_exponent"):

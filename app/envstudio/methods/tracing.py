@@ -20,7 +20,8 @@ from envstudio.methods.context import GpuScene
 
 NODE_BINDING = 0
 TRIANGLE_BINDING = 1
-#: Reflector hits a traced ray follows as mirror bounces before it returns black.
+#: Reflector hits a traced path continues through (sampling the material, reference/paths.glsl)
+#: before it returns black.
 TRACE_BOUNCES = 3
 
 

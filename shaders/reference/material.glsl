@@ -1,0 +1,55 @@
+// The reflector's material for the reference (methods/reference.py): its
+// uniforms and one-sample BRDF sampling, used wherever a path continues at a
+// reflector (paths.glsl). Needs common/fresnel.glsl and reference/sampling.glsl.
+//   model 0 (seed 000 eq. 8): (1 - F) k_d / pi (n.l) + F (N+1)/2pi (r.l)^N, F = Schlick(n.v);
+//   model 1 (microfacet): k_d / pi (1 - F(n.v)) (n.l) + GGX D G2 F(v.h) / (4 n.v).
+uniform int u_brdf_model;
+uniform float u_kd;
+uniform float u_fresnel;
+uniform float u_phong_exponent;
+
+// Beyond this Phong exponent the lobe is narrower than any environment texel
+// (half-width under 0.3 degrees): a continuing path takes the mirror direction.
+const float MIRROR_EXPONENT = 1e5;
+
+// GGX roughness of a Phong exponent N (a Phong exponent N is about a Blinn exponent 4N).
+float microfacet_alpha() { return sqrt(2.0 / (4.0 * u_phong_exponent + 2.0)); }
+
+// Continue a path that arrived along `direction` at a reflector with unit
+// normal n (facing the arrival): a new direction drawn from the BRDF times the
+// cosine (model 0: in proportion to it exactly, so the weight is the albedo
+// (1 - F) k_d + F; model 1: the mixture of the cosine and GGX half-vector
+// densities), and `weight` = f (n.l) / pdf. xi: three numbers in [0, 1).
+vec3 sample_reflector(vec3 direction, vec3 n, vec3 xi, out float weight) {
+    vec3 v = -direction;
+    float n_dot_v = max(dot(n, v), 1e-4);
+    float F = schlick_fresnel(u_fresnel, n_dot_v);
+    float diffuse = (1.0 - F) * u_kd;
+    if (u_brdf_model == 0) {
+        float specular = F;
+        weight = diffuse + specular;
+        if (weight <= 0.0) return n;
+        float p_diffuse = diffuse / weight;
+        vec3 r = reflect(direction, n);
+        if (xi.z < p_diffuse) return sample_cosine(n, xi.xy);
+        return u_phong_exponent >= MIRROR_EXPONENT ? r : sample_phong(r, u_phong_exponent, xi.xy);
+    }
+    float alpha = microfacet_alpha();
+    // pick the diffuse lobe in proportion to its albedo against the Fresnel-weighted GGX lobe
+    float p_diffuse = diffuse / max(diffuse + F, 1e-6);
+    vec3 l = xi.z < p_diffuse ? sample_cosine(n, xi.xy) : reflect(direction, sample_ggx_half(n, alpha, xi.xy));
+    float n_dot_l = dot(n, l);
+    if (n_dot_l <= 0.0) {
+        weight = 0.0;
+        return l;
+    }
+    vec3 h = normalize(l + v);
+    float n_dot_h = max(dot(n, h), 0.0);
+    float v_dot_h = max(dot(v, h), 1e-4);
+    float D = ggx_d(n_dot_h, alpha);
+    float specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
+                     / (4.0 * n_dot_v);
+    float pdf = p_diffuse * n_dot_l / PI + (1.0 - p_diffuse) * D * n_dot_h / (4.0 * v_dot_h);
+    weight = pdf > 0.0 ? (specular + u_kd / PI * (1.0 - F) * n_dot_l) / pdf : 0.0;
+    return l;
+}

@@ -1,0 +1,60 @@
+// Radiance arriving at a reflector point along a traced path (reference/trace.glsl).
+// Needs reference/material.glsl and common/random.glsl; environment_radiance()
+// comes from radiance.glsl.
+//
+// Directions below the surface (the part of the eq. 7 lobe under the horizon)
+// are blocked by the surface itself: no light arrives from inside the object
+// (seed 000 eq. 1 integrates over the hemisphere above the surface; without
+// tracing the lobe is left whole, as the prefiltered-map methods use it). A
+// local object returns its diffuse radiance albedo/pi * E_sh9(n), as the frame
+// draws it. A reflector hit continues with the material's own BRDF, sampled as
+// at the first hit (material.glsl), as a path tracer does: up to
+// u_trace_bounces hits, then black, so self-reflections see the room and not
+// the environment behind its walls. The bound is a uniform so that no
+// compiler unrolls the loop into one copy of the traversal per bounce.
+#include "common/sh.glsl"
+
+uniform vec3 u_sh9[9];
+uniform float u_ray_offset;
+uniform int u_trace_bounces;
+
+// The path's random numbers: set per estimate by the caller (pixel, sample
+// number); each bounce draws the next stream.
+uvec2 g_path_pixel;
+uint g_path_sample;
+uint g_path_stream;
+
+vec3 path_random3() {
+    uvec3 h = pcg3d(uvec3(g_path_pixel.x ^ (g_path_stream << 16u), g_path_pixel.y, g_path_sample));
+    g_path_stream += 1u;
+    return vec3(h >> 8u) * (1.0 / 16777216.0);
+}
+
+vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
+    if (dot(n, l) <= 0.0) return vec3(0.0);
+    vec3 origin = p + n * u_ray_offset;
+    vec3 direction = l;
+    float throughput = 1.0;
+    for (int bounce = 0; bounce < u_trace_bounces; ++bounce) {
+        float t;
+        int tri;
+        vec2 uv;
+        if (!trace_closest(origin, direction, t, tri, uv)) {
+            return throughput * environment_radiance(direction);
+        }
+        vec3 hit_normal = hit_shading_normal(tri, uv);
+        if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
+        vec4 info = trace_triangles[7 * tri + 6];
+        if (info.a < 0.5) {
+            return throughput * info.rgb / PI * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
+        }
+        float weight;
+        vec3 next = sample_reflector(direction, hit_normal, path_random3(), weight);
+        // the surface blocks what the lobe reaches below it, as at the first hit
+        if (weight <= 0.0 || dot(next, hit_normal) <= 0.0) return vec3(0.0);
+        throughput *= weight;
+        origin = origin + t * direction + hit_normal * u_ray_offset;
+        direction = next;
+    }
+    return vec3(0.0);
+}
