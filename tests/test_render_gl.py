@@ -51,8 +51,9 @@ def render(
     return session.read_hdr()
 
 
-def sphere_geometry(camera: OrbitCamera, size=SIZE):
-    """Per-pixel hit mask, normal and view direction of a unit sphere at the origin (NumPy)."""
+def sphere_geometry(camera: OrbitCamera, size=SIZE, centre=(0.0, 0.0, 0.0), radius=1.0):
+    """Per-pixel hit mask, normal and view direction of a sphere, by default the unit
+    sphere at the origin (NumPy); the normal is the hit point's offset over ``radius``."""
     w, h = size
     inv = np.linalg.inv(
         camera.projection_matrix(w / h).astype(np.float64) @ camera.view_matrix().astype(np.float64)
@@ -65,6 +66,7 @@ def sphere_geometry(camera: OrbitCamera, size=SIZE):
     origin = near[..., :3] / near[..., 3:]
     direction = far[..., :3] / far[..., 3:] - origin
     direction /= np.linalg.norm(direction, axis=-1, keepdims=True)
+    origin = (origin - np.asarray(centre, dtype=np.float64)) / radius
     b = np.sum(origin * direction, -1)
     c = np.sum(origin * origin, -1) - 1.0
     disc = b * b - c

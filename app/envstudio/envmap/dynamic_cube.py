@@ -13,9 +13,12 @@ its sixth of the strip (shaders/kautz/capture_local.glsl). A compute pass then
 copies the strip into the cube's faces (moderngl cannot attach a cube face to a
 framebuffer). Six passes cost six clears, six background draws, six draws per
 object and twelve copies, each issued from Python; on the H100 they took
-0.7–1.0 ms of the dynamic update, past the 1 ms the whole update may take. The
-mip chain is then the hardware box filter or the cross-face filter of
-:mod:`envstudio.envmap.mipmaps`.
+0.7–1.0 ms of the dynamic update, past the 1 ms the whole update may take. On a
+context older than 4.3 (no compute shaders) the strip goes into the faces
+through a pixel buffer instead, still without leaving the GPU, so the static
+environment cube of every method (methods.context.GpuScene.static_environment)
+can be captured on OpenGL 3.3 too. The mip chain is then the hardware box filter
+or the cross-face filter of :mod:`envstudio.envmap.mipmaps`.
 
 Face cameras, from the OpenGL cube-map table (core.cubemap): a face texel at
 (a, b) = (2s − 1, 2t − 1) looks along forward + a · right + b · up, so the view
@@ -42,6 +45,7 @@ import numpy.typing as npt
 
 from envstudio.core.transforms import Mat4, perspective
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
+from envstudio.gpu.context import has_compute
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.gpu.programs import ProgramLibrary
@@ -102,6 +106,9 @@ class DynamicCube:
         Face edge n in texels of level 0.
     near, far
         Clip distances of the face cameras in scene units.
+    compute_copy
+        Copy the strip into the faces with a compute pass (OpenGL 4.3) rather than
+        through a pixel buffer; None: whenever the context has compute shaders.
     """
 
     def __init__(
@@ -111,10 +118,12 @@ class DynamicCube:
         size: int,
         near: float = 0.01,
         far: float = 1000.0,
+        compute_copy: bool | None = None,
     ):
         self.ctx = ctx
         self.programs = programs
         self.size = size
+        self.compute_copy = has_compute(ctx) if compute_copy is None else compute_copy
         self.projection = perspective(90.0, 1.0, near, far)
         self.cube: moderngl.TextureCube | None = mipmapped_cube(ctx, size)
         self._strip = ctx.texture((6 * size, size), 4, dtype="f4")
@@ -146,7 +155,6 @@ class DynamicCube:
         """
         background = self.programs.get("kautz/capture_background.glsl")
         local = self.programs.get("kautz/capture_local.glsl")
-        copy = self.programs.compute("kautz/capture_copy.glsl")
         centre_key = tuple(float(c) for c in np.asarray(centre).ravel())
         if centre_key != self._centre:
             self._views = np.stack([face_view(face, centre_key) for face in range(6)])
@@ -171,6 +179,14 @@ class DynamicCube:
                 mesh.render(local, instances=6)
             self.ctx.disable_direct(GL_CLIP_DISTANCE0)
             self.ctx.disable_direct(GL_CLIP_DISTANCE0 + 1)
+        if self.compute_copy:
+            self._copy_by_compute()
+        else:
+            self._copy_by_buffer()
+
+    def _copy_by_compute(self) -> None:
+        """Strip → level 0 of the faces in one compute pass (shaders/kautz/capture_copy.glsl)."""
+        copy = self.programs.compute("kautz/capture_copy.glsl")
         self._strip.use(location=0)
         set_uniform(copy, "u_strip", 0)
         set_uniform(copy, "u_size", self.size)
@@ -178,6 +194,21 @@ class DynamicCube:
         groups = (self.size + 7) // 8
         copy.run(groups, groups, 6)
         self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
+
+    def _copy_by_buffer(self) -> None:
+        """Strip → level 0 of the faces through a pixel buffer, face by face (OpenGL 3.3).
+
+        Columns [f n, (f + 1) n) of the strip are read into the buffer and written
+        as face f, row for row, as the compute copy does.
+        """
+        n = self.size
+        pixels = self.ctx.buffer(reserve=n * n * 16)
+        try:
+            for face in range(6):
+                self._fbo.read_into(pixels, (face * n, 0, n, n), components=4, dtype="f4")
+                self.cube.write(face, pixels)
+        finally:
+            pixels.release()
 
     def build_mipmaps(self, cross_face: bool) -> None:
         """Rebuild levels 1 … from level 0: hardware box filter, or the cross-face filter."""

@@ -49,6 +49,11 @@ def describe(ctx: moderngl.Context) -> str:
     return f"{ctx.info.get('GL_RENDERER', '?')} | {ctx.info.get('GL_VERSION', '?')}"
 
 
+def has_compute(ctx: moderngl.Context) -> bool:
+    """True when ``ctx`` has compute shaders and image load/store (OpenGL 4.3 or later)."""
+    return ctx.version_code >= PREFERRED_VERSION
+
+
 def require_version(ctx: moderngl.Context, version: int, what: str) -> None:
     """Raise a one-line :class:`ParameterError` when ``ctx`` is older than ``version`` (430 = 4.3).
 

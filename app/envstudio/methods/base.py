@@ -5,7 +5,10 @@ radiance). It owns its GPU resources, prepares lazily (what depends on the
 environment is rebuilt only when :attr:`GpuScene.environment_revision`
 changes), times each pass with the frame's :class:`PassTimer`, and sets its
 parameters as uniforms: a parameter change never recompiles unless the
-parameter is declared ``rebuild=True``.
+parameter is declared ``rebuild=True``. An environment-map method looks the
+environment up in ``frame.scene.static_environment()`` (seed 003's static EM:
+the local objects drawn over the far field), not in ``GpuScene.cube``, and keys
+what it derives from it on that object's ``revision``.
 """
 
 from __future__ import annotations

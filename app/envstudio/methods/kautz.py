@@ -12,11 +12,16 @@ One pass draws every reflector with (shaders/kautz/kautz.glsl)
 
 Where the lighting comes from:
 
-- static environment: the environment's lat-long map, box-filtered to 256 × 128
-  ("a very small environment map is sufficient", section 5.1.1), is projected on the
-  CPU with exact texel solid angles whenever GpuScene.environment_revision (or a
-  diffuse parameter) changes; the glossy lookups use the shared cube map and its
-  hardware box-filtered mip chain;
+- static environment, no local objects: the environment's lat-long map,
+  box-filtered to 256 × 128 ("a very small environment map is sufficient",
+  section 5.1.1), is projected on the CPU with exact texel solid angles whenever
+  the environment (or a diffuse parameter) changes; the glossy lookups use the
+  shared cube map and its hardware box-filtered mip chain;
+- static environment with local objects (the room): seed 003's static EM
+  (Figure 1c), GpuScene.static_environment, the local objects captured over the
+  environment from the reflector's centre once per scene change; its mip chain
+  serves the glossy lookups and its 64² level is projected as in ``dynamic``
+  (on the CPU from a read-back where the context has no compute shaders);
 - ``dynamic`` (section 5.1): every frame the local objects are rendered into the six
   faces of a cube map from the reflector's centre over the environment
   (envmap.dynamic_cube), the mip chain is rebuilt, and the SH coefficients (and
@@ -46,9 +51,10 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.sh_lights import DiffuseProjector
+from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
-from envstudio.gpu.context import require_version
+from envstudio.gpu.context import has_compute, require_version
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, GpuScene
@@ -58,7 +64,7 @@ from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
 
 #: Lat-long height of the static projection (256 × 128, section 5.1.1).
 STATIC_HEIGHT = 128
-#: Face size of the cube level the dynamic projection reads.
+#: Face size of the cube level the projection of a captured cube (dynamic or static) reads.
 DYNAMIC_FACE_SIZE = 64
 #: Light slots of the shader's uniform block at most.
 MAX_LIGHTS = 32
@@ -168,8 +174,6 @@ class KautzMethod(Method):
         self._filtered_key: tuple | None = None
         self._dynamic: DynamicCube | None = None
         self._gpu_projector: GpuDiffuseProjector | None = None
-        self._centre_key: tuple | None = None
-        self._centre = np.zeros(3)
 
     # -- rendering ---------------------------------------------------------------------------
 
@@ -208,26 +212,29 @@ class KautzMethod(Method):
     def _update_static(
         self, frame: FrameInputs, coefficients: int, lights: int
     ) -> moderngl.TextureCube:
-        """Project the environment on the CPU when it (or a diffuse setting) changed."""
+        """Project the static environment when it (or a diffuse setting) changed.
+
+        Without local objects the lat-long map is projected on the CPU; with them,
+        the captured cube (GpuScene.static_environment, seed 003 Figure 1c).
+        """
         scene = frame.scene
+        static = scene.static_environment(frame.timer)
         threshold = float(self.values["light_threshold"])
-        key = (id(scene), scene.environment_revision, coefficients, lights, threshold)
+        key = (id(scene), static.revision, coefficients, lights, threshold)
         if key != self._static_key:
             with frame.timer.measure("kautz.project"):
-                radiance = _static_map(scene.scene.environment.radiance)
-                projector = self._latlong_projector(
-                    radiance.shape[:2], coefficients, lights, threshold
-                )
-                block = projector.project(radiance).block(lights)
-                self._rows.write(np.ascontiguousarray(block).tobytes())
+                if static.captured:
+                    self._project_cube(static.cube, coefficients, lights, threshold)
+                else:
+                    self._project_latlong(scene, coefficients, lights, threshold)
             self._static_key = key
         if not self.values["cross_face_filter"]:
-            return scene.cube
-        filtered_key = (id(scene), scene.environment_revision)
+            return static.cube
+        filtered_key = (id(scene), static.revision)
         if filtered_key != self._filtered_key:
             self._require_compute("cross_face_filter")
             with frame.timer.measure("kautz.mipmaps"):
-                self._build_filtered(scene)
+                self._build_filtered(static.cube)
             self._filtered_key = filtered_key
         return self._filtered
 
@@ -242,44 +249,73 @@ class KautzMethod(Method):
             if self._dynamic is not None:
                 self._dynamic.release()
             self._dynamic = DynamicCube(self.ctx, self.programs, size)
-            self._gpu_projector = self._gpu_projector or GpuDiffuseProjector(
-                self.ctx, self.programs
-            )
-        objects = [(g.mesh, g.model, g.normal, g.node.color) for g in scene.local_objects()]
+        objects = scene.local_capture_objects()
         with frame.timer.measure("kautz.capture"):
-            self._dynamic.capture(scene.cube, scene.sh9, objects, self._reflector_centre(scene))
+            self._dynamic.capture(scene.cube, scene.sh9, objects, scene.reflector_centre())
         with frame.timer.measure("kautz.mipmaps"):
             self._dynamic.build_mipmaps(bool(self.values["cross_face_filter"]))
-        level = max(int(np.log2(size / DYNAMIC_FACE_SIZE)), 0)
         with frame.timer.measure("kautz.sh"):
-            self._gpu_projector.project(
-                self._dynamic.cube,
-                level,
-                coefficients,
-                lights,
-                float(self.values["light_threshold"]),
-                self._rows,
+            self._project_on_gpu(
+                self._dynamic.cube, coefficients, lights, float(self.values["light_threshold"])
             )
         self._static_key = None  # the block now holds the dynamic lighting
         return self._dynamic.cube
 
     # -- helpers -----------------------------------------------------------------------------
 
-    def _latlong_projector(
-        self, shape: tuple[int, int], coefficients: int, lights: int, threshold: float
+    def _project_latlong(
+        self, scene: GpuScene, coefficients: int, lights: int, threshold: float
+    ) -> None:
+        """Project the environment's lat-long map on the CPU into the block (section 5.1.1)."""
+        radiance = _static_map(scene.scene.environment.radiance)
+        projector = self._cpu_projector(
+            "latlong", radiance.shape[:2], coefficients, lights, threshold
+        )
+        self._rows.write(np.ascontiguousarray(projector.project(radiance).block(lights)).tobytes())
+
+    def _project_cube(
+        self, cube: moderngl.TextureCube, coefficients: int, lights: int, threshold: float
+    ) -> None:
+        """Project a captured cube's 64² level into the block: on the GPU, or read back (3.3)."""
+        if has_compute(self.ctx):
+            self._project_on_gpu(cube, coefficients, lights, threshold)
+            return
+        faces = read_cube(cube, _projected_level(cube), self.programs)
+        projector = self._cpu_projector("cube", faces.shape[1:3], coefficients, lights, threshold)
+        self._rows.write(np.ascontiguousarray(projector.project(faces).block(lights)).tobytes())
+
+    def _project_on_gpu(
+        self, cube: moderngl.TextureCube, coefficients: int, lights: int, threshold: float
+    ) -> None:
+        """Project the cube's 64² level into the block by compute shaders (prefilter.sh_gpu)."""
+        if self._gpu_projector is None:
+            self._gpu_projector = GpuDiffuseProjector(self.ctx, self.programs)
+        self._gpu_projector.project(
+            cube, _projected_level(cube), coefficients, lights, threshold, self._rows
+        )
+
+    def _cpu_projector(
+        self,
+        layout: str,
+        shape: tuple[int, int],
+        coefficients: int,
+        lights: int,
+        threshold: float,
     ) -> DiffuseProjector:
-        """The quadrature of the static map, kept while its shape and settings stay."""
-        key = (shape, coefficients, lights, threshold)
+        """The quadrature of a ``latlong`` (h, w) or ``cube`` (n, n) map, kept while it fits."""
+        key = (layout, shape, coefficients, lights, threshold)
         if key != self._projector_key:
-            self._projector = DiffuseProjector.for_latlong(
-                *shape, coefficients=coefficients, lights=lights, threshold=threshold
-            )
+            options = {"coefficients": coefficients, "lights": lights, "threshold": threshold}
+            if layout == "latlong":
+                self._projector = DiffuseProjector.for_latlong(*shape, **options)
+            else:
+                self._projector = DiffuseProjector.for_cube(shape[0], **options)
             self._projector_key = key
         return self._projector
 
-    def _build_filtered(self, scene: GpuScene) -> None:
-        """Copy level 0 of the shared cube map (on the GPU) and build the cross-face chain."""
-        size = scene.cube_size
+    def _build_filtered(self, source: moderngl.TextureCube) -> None:
+        """Copy level 0 of ``source`` (on the GPU) and build the cross-face chain from it."""
+        size = source.size[0]
         if self._filtered is None or self._filtered.size[0] != size:
             if self._filtered is not None:
                 self._filtered.release()
@@ -287,19 +323,11 @@ class KautzMethod(Method):
         pixels = self.ctx.buffer(reserve=size * size * 16)
         try:
             for face in range(6):
-                scene.cube.read_into(pixels, face)
+                source.read_into(pixels, face)
                 self._filtered.write(face, pixels)
         finally:
             pixels.release()
         build_cross_face_mipmaps(self.ctx, self.programs, self._filtered)
-
-    def _reflector_centre(self, scene: GpuScene) -> npt.NDArray[np.float64]:
-        """Centre of the reflectors' bounding box, recomputed when a transform changes."""
-        key = tuple((id(g.node), id(g.node.mesh), g.model.tobytes()) for g in scene.reflectors())
-        if key != self._centre_key:
-            self._centre = scene.scene.reflector_centre()
-            self._centre_key = key
-        return self._centre
 
     def _require_compute(self, feature: str) -> None:
         require_version(self.ctx, 430, f"{feature}=true needs OpenGL 4.3 compute shaders")
@@ -312,8 +340,13 @@ class KautzMethod(Method):
             if obj is not None:
                 obj.release()
         self._rows = self._filtered = self._dynamic = self._gpu_projector = None
-        self._static_key = self._centre_key = self._filtered_key = None
+        self._static_key = self._filtered_key = None
         self._projector = self._projector_key = None
+
+
+def _projected_level(cube: moderngl.TextureCube) -> int:
+    """Mip level of ``cube`` with DYNAMIC_FACE_SIZE² faces (level 0 if smaller)."""
+    return max(int(np.log2(cube.size[0] / DYNAMIC_FACE_SIZE)), 0)
 
 
 def _static_map(radiance: npt.NDArray[np.float32]) -> npt.NDArray[np.float64]:

@@ -14,7 +14,10 @@ class MirrorMethod(Method):
 
     L_o = (1 − F) · k_d · L_blur(n) + F · L_env(r), with Schlick F(r·n) of f_λ
     (seed 000 eq. 8, section 5.2) and L_blur the cube map's 2×2-per-face mip
-    level along the normal, a stand-in for irradiance/π without SH.
+    level along the normal, a stand-in for irradiance/π without SH. Both read the
+    scene's static environment (GpuScene.static_environment): the local objects
+    drawn over the far field as seen from the reflectors' centre (seed 003
+    Figure 1c), so the teapot in the room reflects the room.
     """
 
     name = "mirror"
@@ -36,8 +39,10 @@ class MirrorMethod(Method):
     )
 
     def render(self, frame: FrameInputs) -> None:
+        environment = frame.scene.static_environment(frame.timer)
+        frame.target.use()  # a capture may have bound its own framebuffer
         program = self.programs.get("mirror/mirror.glsl")
-        frame.scene.cube.use(location=0)
+        environment.cube.use(location=0)
         set_uniform(program, "u_environment", 0)
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_fresnel", self.values["fresnel"])
