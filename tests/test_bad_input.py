@@ -153,3 +153,31 @@ def test_no_egl_is_one_line_in_a_real_process(tmp_path):
     assert result.returncode == 2, result.stderr
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert "EGL" in result.stderr and "libegl" in result.stderr
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "abc", "nan", "inf", "1e9"])
+def test_a_bad_time_limit_is_one_line_and_writes_nothing(capsys, tmp_path, value):
+    out = tmp_path / "cmp"
+    status, err = run_cli(
+        capsys, "compare", "--methods", "mirror", "--time-limit", value, "--out", str(out)
+    )
+    assert_one_line_error(status, err, f"--time-limit {value}", "positive number of seconds")
+    assert not out.exists()
+    png = tmp_path / "ref.png"
+    argv = ["render", "--method", "reference", "--time-limit", value, "-o", str(png)]
+    status, err = run_cli(capsys, *argv)
+    assert_one_line_error(status, err, f"--time-limit {value}", "positive number of seconds")
+    assert not png.exists()
+
+
+def test_a_time_limit_for_a_one_frame_method_or_out_of_range_is_one_line(capsys, tmp_path):
+    png = tmp_path / "out.png"
+    status, err = run_cli(
+        capsys, "render", "--method", "mirror", "--time-limit", "5", "-o", str(png)
+    )
+    assert_one_line_error(status, err, "--time-limit", "method mirror", "progressive")
+    out = tmp_path / "cmp"
+    argv = ["compare", "--methods", "mirror", "--param", "time_limit=-1", "--out", str(out)]
+    status, err = run_cli(capsys, *argv)
+    assert_one_line_error(status, err, "time_limit=-1", "[0, 1e+06]")
+    assert not png.exists() and not out.exists()

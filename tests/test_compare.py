@@ -2,6 +2,8 @@
 
 import json
 import math
+import re
+import time
 
 import numpy as np
 import pytest
@@ -14,6 +16,14 @@ from envstudio.methods.base import Method
 from envstudio.methods.parameters import Parameter
 from envstudio.methods.reference import ReferenceMethod
 from envstudio.render.compare import plan_parameters
+from envstudio.render.stopping import (
+    NOISE_RULE,
+    NOISE_SHARE,
+    TOLERANCE_RULE,
+    Judgement,
+    ReferenceJudge,
+    choose_rule,
+)
 
 FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
 
@@ -238,3 +248,122 @@ def test_an_unreadable_saved_reference_is_one_warning_and_redone(small_scene, tm
     assert len(warnings) == 1 and saved.name in warnings[0]
     report = json.loads((tmp_path / "b" / "compare.json").read_text())["reference"]
     assert report["resumed_samples"] == 0 and report["samples"] == 32
+
+
+def test_by_default_the_reference_stops_once_its_noise_is_a_tenth_of_the_error(
+    small_scene, tmp_path, capsys
+):
+    """Mirror against a glossy reference: a large error, so the reference stops long before its
+    tolerance would; the strict rule then continues the same saved accumulation."""
+    out = tmp_path / "default"
+    assert compare(small_scene, out, "--methods", "mirror,reference") == 0
+    err = capsys.readouterr().err
+    report = json.loads((out / "compare.json").read_text())
+    ref, mirror = report["reference"], report["methods"]["mirror"]
+    assert (ref["stopping_rule"], ref["stopped_by"]) == ("noise", "reliable")
+    threshold = NOISE_SHARE * mirror["median_relative_error"]
+    assert ref["relative_standard_error"] < threshold, "the criterion holds at the stop"
+    assert ref["relative_standard_error"] > 0.5 * threshold, "and it stopped there, not later"
+    assert report["reliable"] and report["unreliable_reason"] is None
+    strict_tolerance = 0.003
+    assert not ref["converged"] and ref["rms_change"] > strict_tolerance
+    assert "stopped: every method reliable" in err
+    table = (out / "compare.md").read_text()
+    assert "stopping rule: noise < 0.1 × each method's median relative error (default)" in table
+    assert (
+        f"noise (median relative standard error) {100 * ref['relative_standard_error']:.3g} %"
+        in (table)
+    )
+
+    strict = tmp_path / "strict"
+    tolerance = f"tolerance={strict_tolerance}"  # given explicitly: the strict rule
+    assert compare(small_scene, strict, "--methods", "mirror", "--param", tolerance) == 0
+    again = json.loads((strict / "compare.json").read_text())["reference"]
+    assert (again["stopping_rule"], again["stopped_by"], again["converged"]) == (
+        "tolerance",
+        "converged",
+        True,
+    )
+    assert again["resumed_samples"] == ref["samples"] < again["samples"]
+    assert "stopping rule: half-change < tolerance (strict)" in (strict / "compare.md").read_text()
+
+
+def test_strict_with_a_time_limit_that_ends_first_is_a_note_and_not_converged(
+    small_scene, tmp_path, capsys
+):
+    out = tmp_path / "cmp"
+    unreachable = ["--param", "tolerance=0.00001", "--param", "max_samples=10000000"]
+    status = compare(
+        small_scene, out, "--methods", "mirror", "--strict", "--time-limit", "1.5", *unreachable
+    )
+    err = capsys.readouterr().err
+    assert status == 0
+    ref = json.loads((out / "compare.json").read_text())["reference"]
+    assert (ref["stopping_rule"], ref["stopped_by"], ref["converged"]) == (
+        "tolerance",
+        "time_limit",
+        False,
+    )
+    assert ref["parameters"]["time_limit"] == 1.5
+    assert 1.5 <= ref["wall_s"] < 1.5 + 1.5, "stops at about the limit"
+    notes = [line for line in err.splitlines() if line.startswith("envstudio: note:")]
+    assert len(notes) == 1
+    assert "time limit (1.5 s) ended before the tolerance (0.001 %)" in notes[0]
+    assert f"half-change {100 * ref['rms_change']:.3g} %" in notes[0]
+    assert "NOT converged" in notes[0]
+    assert "envstudio: error" not in err
+    line = next(
+        s for s in (out / "compare.md").read_text().splitlines() if s.startswith("reference:")
+    )
+    assert "stopped: time limit reached" in line and line.endswith(": NOT converged")
+
+
+def test_render_reference_takes_a_time_limit_and_reports_the_noise(small_scene, tmp_path, capsys):
+    out = tmp_path / "ref.exr"
+    argv = ["render", "--scene", str(small_scene), "--method", "reference", "--size", "32x32"]
+    params = ["--param", "trace=false", "--param", "tolerance=0.00001"]
+    start = time.perf_counter()
+    assert main([*argv, *params, "--time-limit", "1", "-o", str(out)]) == 0
+    assert time.perf_counter() - start < 1 + 10
+    err = capsys.readouterr().err
+    (line,) = [s for s in err.splitlines() if s.startswith("reference:")]
+    assert "time limit 1 s reached: NOT converged" in line
+    noise = float(re.search(r"noise ([0-9.]+) %", line).group(1))
+    assert 0 < noise < 50
+    assert read_image(out).shape == (32, 32, 3)
+
+
+def judge_with(noise: float, errors: dict, samples: int, seconds: float, judge=None):
+    judge = judge or ReferenceJudge(NOISE_RULE, {name: None for name in errors})
+    judge.record(Judgement(samples // 8, samples, seconds, noise, errors))
+    return judge
+
+
+def test_the_progress_line_shows_the_noise_each_error_and_the_projected_time_left():
+    # noise 4 % at 100 spp, the smallest error 10 %: 1 % needs 16x the samples, 1600 spp;
+    # 50 spp/s since the first judgement: 1500 spp in 30 s
+    judge = judge_with(0.06, {"mirror": 0.5, "kautz": 0.1}, 50, 1.0)
+    judge = judge_with(0.04, {"mirror": 0.5, "kautz": 0.1}, 100, 2.0, judge)
+    assert judge.seconds_left() == pytest.approx(30.0)
+    line = judge.progress_line()
+    assert line.startswith("noise 4 % (needs < 1 %); errors: mirror 50 % ✓, kautz 10 %")
+    assert line.endswith("≈ 30 s to go")
+    assert not judge.satisfied()
+    judge = judge_with(0.009, {"mirror": 0.5, "kautz": 0.1}, 1600, 32.0, judge)
+    assert judge.satisfied() and judge.seconds_left() == 0.0
+
+
+def test_the_noise_rule_waits_for_enough_batches_and_judges_at_checkpoints():
+    judge = judge_with(0.001, {"mirror": 0.5}, 7 * 8, 1.0)
+    assert judge.last.all_reliable and not judge.satisfied(), "7 batches: spread biased low"
+    assert not judge.due(7) and judge.due(8) and not judge.due(9) and judge.due(10)
+    strict = ReferenceJudge(TOLERANCE_RULE, {"mirror": None})
+    strict.record(Judgement(64, 512, 1.0, 0.001, {"mirror": 0.5}))
+    assert not strict.satisfied(), "the strict rule stops on the tolerance only"
+
+
+def test_the_rule_is_strict_when_asked_when_tolerance_is_given_or_nothing_else_is_compared():
+    assert choose_rule(["mirror"], {}, strict=False) == NOISE_RULE
+    assert choose_rule(["mirror"], {}, strict=True) == TOLERANCE_RULE
+    assert choose_rule(["mirror"], {"tolerance": 0.01}, strict=False) == TOLERANCE_RULE
+    assert choose_rule(["reference"], {}, strict=False) == TOLERANCE_RULE

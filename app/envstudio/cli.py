@@ -39,6 +39,14 @@ def _add_param_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_time_limit_option(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument(
+        "--time-limit",
+        metavar="SECONDS",
+        help=f"{what} this many seconds and report the noise reached (a positive number)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = _Parser(prog="envstudio", description=__doc__.splitlines()[0])
@@ -66,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_param_option(render)
     render.add_argument("--camera", help="AZIMUTH,ELEVATION,DISTANCE in degrees and scene units")
     render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default 512x512)")
+    _add_time_limit_option(render, "progressive methods (reference): stop accumulating after")
     render.add_argument("-o", "--output", required=True, help="OUT.png (as displayed) or OUT.exr")
 
     envmap = sub.add_parser("envmap", help="convert an environment (GPU) and save it as EXR")
@@ -134,6 +143,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="parameter for every method that declares it, the reference's included "
         "(repeatable), e.g. phong_exponent=50 or max_samples=1024",
     )
+    compare.add_argument(
+        "--strict",
+        action="store_true",
+        help="accumulate the reference until its successive-half change is below tolerance "
+        "(default: until its noise is under a tenth of every method's error; an explicit "
+        "--param tolerance=... is strict too)",
+    )
+    _add_time_limit_option(compare, "stop the reference after")
     compare.add_argument("--frames", type=int, default=20, help="timed frames per method")
     compare.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
     compare.add_argument("--out", required=True, help="folder for the images, table and index.html")

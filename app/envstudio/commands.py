@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 from tqdm import tqdm
@@ -40,19 +41,51 @@ def _scene(args: argparse.Namespace) -> Scene:
     return build_scene(args.scene, args.env, args.mesh)
 
 
+def parse_time_limit(text: str | None) -> float | None:
+    """``--time-limit SECONDS`` as a float (None when not given).
+
+    Raises
+    ------
+    ParameterError
+        Unless a finite number > 0 and at most the reference's ``time_limit`` maximum.
+    """
+    if text is None:
+        return None
+    from envstudio.methods.reference import MAX_TIME_LIMIT_S
+
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0 < seconds <= MAX_TIME_LIMIT_S:
+        raise ParameterError(
+            f"--time-limit {text}: expected a positive number of seconds "
+            f"(at most {MAX_TIME_LIMIT_S:g})"
+        )
+    return seconds
+
+
 def run_render(args: argparse.Namespace) -> int:
     """``envstudio render``: one frame through EGL to PNG (as displayed) or EXR (linear)."""
     size = parse_size(args.size)
     output = check_output_path(args.output)
     if output.suffix.lower() not in (".png", ".exr"):
         raise ParameterError(f"-o {output}: expected a .png or .exr file name")
-    method_class(args.method)
+    declared = {p.name for p in method_class(args.method).parameters}
+    time_limit = parse_time_limit(args.time_limit)
+    if time_limit is not None and "time_limit" not in declared:
+        raise ParameterError(
+            f"--time-limit: method {args.method} draws its image in one frame "
+            "(only progressive methods, such as reference, take a time limit)"
+        )
     camera = parse_camera(args.camera) if args.camera else None
     scene = _scene(args)
     session = RenderSession(scene)
     try:
         method = session.method(args.method)
         apply_params(session, method, args.param)
+        if time_limit is not None:
+            method.values["time_limit"] = time_limit
         if camera:
             session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
         stats = render_until_finished(session, method, size)
@@ -276,6 +309,7 @@ def run_compare(args: argparse.Namespace) -> int:
     plan = plan_parameters(method_classes(names), args.param)
     if args.frames < 1 or args.warmup < 0:
         raise ParameterError("--frames must be >= 1 and --warmup >= 0")
+    time_limit = parse_time_limit(args.time_limit)
     out = check_output_path(args.out)
     camera = parse_camera(args.camera) if args.camera else None
     session = RenderSession(_scene(args))
@@ -291,17 +325,37 @@ def run_compare(args: argparse.Namespace) -> int:
             args.warmup,
             progress=sys.stderr.isatty(),
             cache=args.cache,
+            strict=args.strict,
+            time_limit_s=time_limit,
         )
     finally:
         session.release()
     write_report(comparison, out)
     print(format_table(comparison))
+    note = _time_limit_note(comparison.reference)
+    if note:
+        print(f"envstudio: note: {note}", file=sys.stderr)
     if not comparison.reliable:
         print(
             f"envstudio: warning: metrics unreliable: {comparison.reference.unreliable_reason}",
             file=sys.stderr,
         )
     return 0
+
+
+def _time_limit_note(reference) -> str | None:
+    """One line when the time limit ended a strict (tolerance) run before it converged."""
+    from envstudio.render.stopping import TOLERANCE_RULE
+
+    if reference.stopping_rule != TOLERANCE_RULE or reference.stopped_by != "time_limit":
+        return None
+    change = reference.status.rms_change
+    reached = "no half-change measured" if change is None else f"half-change {100 * change:.3g} %"
+    return (
+        f"the time limit ({float(reference.parameters['time_limit']):g} s) ended before the "
+        f"tolerance ({100 * float(reference.parameters['tolerance']):.3g} %): {reached} at "
+        f"{reference.status.samples} spp, reported as NOT converged"
+    )
 
 
 def run_sh(args: argparse.Namespace) -> int:

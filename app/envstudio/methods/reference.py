@@ -22,7 +22,11 @@ Convergence is judged by the successive-half criterion: four times per
 doubling of the batch count n (:func:`is_checkpoint`) the estimate I_n is
 compared with I_{n/2}; the reference is converged when RMS(I_n − I_{n/2}) /
 RMS(I_n) over the reflector pixels falls below ``tolerance`` (0.1 % by
-default). The accumulation restarts whenever the
+default). It also stops on its sample budget (``max_samples``) or its time
+budget (``time_limit`` seconds, 0: none), both reported as not converged, and
+its status line shows the noise reached: the median relative standard error
+over the reflector (:meth:`ReferenceMethod.relative_standard_error`), the
+quantity ``compare`` stops on by default. The accumulation restarts whenever the
 camera, the parameters, the environment, the transforms or the size change;
 the parameters that only decide when to stop and how a batch is split into
 draws (:data:`SCHEDULING_PARAMETERS`) do not restart it: a larger budget or a
@@ -42,7 +46,7 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.core.env_sampling import EnvironmentDistribution
+from envstudio.core.env_sampling import LUMINANCE, EnvironmentDistribution
 from envstudio.gpu.context import is_software_renderer, require_version
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
@@ -65,7 +69,13 @@ ADAPT_FROM_BATCHES = 8
 #: Parameters that decide when to stop and how a batch is split into draws, not
 #: what is estimated: changing one continues the accumulation, and the saved
 #: accumulations' keys leave them out (render/reference_cache.py).
-SCHEDULING_PARAMETERS = ("max_samples", "tolerance", "samples_per_draw")
+SCHEDULING_PARAMETERS = ("max_samples", "tolerance", "time_limit", "samples_per_draw")
+#: Seconds between measurements of the noise shown in the status line (a GPU read each).
+NOISE_REFRESH_S = 2.0
+#: Largest ``time_limit``, s (11.6 days).
+MAX_TIME_LIMIT_S = 1e6
+#: Batches before the time limit may stop the accumulation (a standard error needs two).
+MIN_TIMED_BATCHES = 2
 
 
 @dataclass
@@ -89,6 +99,16 @@ class ConvergenceStatus:
         ``seconds`` (wall time since ``started``).
     started : float
         ``time.perf_counter()`` at the restart.
+    run_started : float
+        ``time.perf_counter()`` when this process started (or resumed) the
+        accumulation: ``time_limit`` counts from here.
+    noise : float or None
+        Median relative standard error over the reflector at ``noise_samples``
+        (:func:`median_relative_error`; None before it is measured).
+    noise_samples : int
+        ``samples`` when ``noise`` was measured (-1 before).
+    noise_at : float
+        ``time.perf_counter()`` when ``noise`` was measured.
     """
 
     batches: int = 0
@@ -98,16 +118,28 @@ class ConvergenceStatus:
     converged: bool = False
     checks: list[dict] = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
+    run_started: float = field(default_factory=time.perf_counter)
+    noise: float | None = None
+    noise_samples: int = -1
+    noise_at: float = 0.0
 
     def elapsed(self) -> float:
         """Wall seconds since ``started`` (a resumed run counts its earlier runs' time)."""
         return time.perf_counter() - self.started
 
+    def run_elapsed(self) -> float:
+        """Wall seconds since ``run_started`` (this process's part of the accumulation)."""
+        return time.perf_counter() - self.run_started
+
     def describe(self) -> str:
         """One line for the UI and the CLI."""
         change = "—" if self.rms_change is None else f"{100 * self.rms_change:.3f} %"
         state = "converged" if self.converged else "converging"
-        return f"{self.samples} spp, half-change {change}: {state}"
+        noise = ""
+        if self.noise is not None:
+            value = f"{100 * self.noise:.3g} %" if math.isfinite(self.noise) else "—"
+            noise = f", noise {value}"
+        return f"{self.samples} spp{noise}, half-change {change}: {state}"
 
 
 class _EnvironmentTables:
@@ -247,6 +279,17 @@ class ReferenceMethod(Method):
             "Converged when the successive-half RMS change is below this.",
             log=True,
         ),
+        Parameter(
+            "time_limit",
+            "float",
+            0.0,
+            0.0,
+            MAX_TIME_LIMIT_S,
+            "s",
+            "Time budget: stop accumulating this many seconds after the (re)start, reported as "
+            "not converged unless it converged first (0: no limit).",
+            log=True,
+        ),
     )
 
     def __init__(self, ctx, programs):
@@ -274,20 +317,73 @@ class ReferenceMethod(Method):
         self._sample_allocation = SampleAllocation.plain((1, 1))
 
     def finished(self) -> bool:
-        """Converged, or the sample budget is spent."""
-        return self.status.converged or self.status.samples >= int(self.values["max_samples"])
+        """Converged, the sample budget spent, or the time limit reached."""
+        return self.stop_reason() is not None
+
+    def stop_reason(self) -> str | None:
+        """Why the accumulation stops: ``converged``, ``max_samples`` or ``time_limit``; None.
+
+        The time limit (``time_limit`` > 0) counts from this process's
+        (re)start of the accumulation (:meth:`ConvergenceStatus.run_elapsed`)
+        and ends it only once :data:`MIN_TIMED_BATCHES` batches give a
+        standard error.
+        """
+        status = self.status
+        if status.converged:
+            return "converged"
+        if status.samples >= int(self.values["max_samples"]):
+            return "max_samples"
+        limit = float(self.values["time_limit"])
+        if limit > 0 and status.batches >= MIN_TIMED_BATCHES and status.run_elapsed() >= limit:
+            return "time_limit"
+        return None
 
     def status_line(self) -> str:
-        """Samples per pixel, the last half-change, the state and the projected time left."""
+        """Samples, noise, the last half-change, the state, and the projected time left."""
+        self._refresh_noise()
         line = self.status.describe()
-        if self.status.converged:
+        reason = self.stop_reason()
+        if reason == "converged":
             return line
-        if self.status.samples >= int(self.values["max_samples"]):
+        if reason == "max_samples":
             return line + " (budget spent: NOT converged)"
+        limit = float(self.values["time_limit"])
+        if reason == "time_limit":
+            return line + f" (time limit {limit:g} s reached: NOT converged)"
         projection = project_convergence(self.status.checks, float(self.values["tolerance"]))
+        if limit > 0:
+            line += f", time limit in {duration(limit - self.status.run_elapsed())}"
         if projection is not None:
-            line += f", ≈ {_duration(projection['seconds'] - self.status.elapsed())} to go"
+            line += f", ≈ {duration(projection['seconds'] - self.status.elapsed())} to go"
         return line
+
+    def relative_standard_error(self) -> float:
+        """The noise: median relative standard error over the reflector now.
+
+        Returns
+        -------
+        float
+            :func:`median_relative_error` of the estimate and its standard
+            error over the covered pixels; inf before two batches (no spread
+            yet). Under ``sequence=sobol`` an upper bound.
+        """
+        if self._sum is None or self.status.batches < 2:
+            return float("inf")
+        total, squares = self._read()
+        count = np.maximum(total[..., 3:], 1.0)
+        error = np.sqrt(_batch_variance(total, squares) / count)
+        return median_relative_error(total[..., :3] / count, error, total[..., 3] > 0)
+
+    def _refresh_noise(self) -> None:
+        """Measure the noise for the status line: new samples, and stopped or its interval due."""
+        status = self.status
+        if self._sum is None or status.samples == status.noise_samples:
+            return
+        if not self.finished() and time.perf_counter() - status.noise_at < NOISE_REFRESH_S:
+            return
+        status.noise = self.relative_standard_error()
+        status.noise_samples = status.samples
+        status.noise_at = time.perf_counter()
 
     # -- rendering ---------------------------------------------------------------------------
 
@@ -741,6 +837,34 @@ def _batch_variance(
     return np.where(k >= 2, variance, np.float32(np.inf))
 
 
+def median_relative_error(
+    estimate: npt.NDArray[np.float32],
+    error: npt.NDArray[np.float32],
+    mask: npt.NDArray[np.bool_],
+) -> float:
+    """Median over ``mask`` of the luminance error over the luminance of the estimate.
+
+    Parameters
+    ----------
+    estimate, error : (h, w, 3) float
+        Mean radiance and its standard error per channel (channel errors
+        are added in the luminance: an upper bound).
+    mask : (h, w) bool
+        The pixels measured; those of zero luminance are left out.
+
+    Returns
+    -------
+    float
+        Unitless; inf when no pixel of ``mask`` is lit.
+    """
+    estimate_y = estimate[mask] @ LUMINANCE
+    error_y = error[mask] @ LUMINANCE
+    lit = estimate_y > 0
+    if not lit.any():
+        return float("inf")
+    return float(np.median(error_y[lit] / estimate_y[lit]))
+
+
 def project_convergence(checks: list[dict], tolerance: float) -> dict | None:
     """Samples and seconds to reach ``tolerance``, extrapolated from the last checks.
 
@@ -783,7 +907,8 @@ def project_convergence(checks: list[dict], tolerance: float) -> dict | None:
     }
 
 
-def _duration(seconds: float) -> str:
+def duration(seconds: float) -> str:
+    """``12 s``, ``5 min``, ``2.5 h``."""
     if seconds < 120:
         return f"{max(seconds, 0):.0f} s"
     if seconds < 7200:

@@ -1,18 +1,22 @@
-"""``envstudio compare``: methods against the converged reference at matched parameters.
+"""``envstudio compare``: methods against the reference at matched parameters.
 
 Steps, in one :class:`RenderSession` (one camera, one size, one display setting):
 
-1. The reference (methods/reference.py) accumulates until it converges or spends
-   its sample budget (``max_samples``), with a progress bar. Its coverage is the
-   reflector mask; an empty mask (the camera sees no reflector) is an error.
-   With the cache on (the CLI's default), the accumulation is saved as it
-   goes and a later run with the same inputs resumes it
-   (render/reference_cache.py).
-2. Each method renders the same frame (until :meth:`Method.finished`); its
-   linear HDR frame and its display image are kept and measured against the
-   reference's with core/metrics.py (PSNR, SSIM, FLIP on the display images
-   over the mask).
-3. Each method is timed by the bench code path (render/bench.py: wall clock
+1. Each method renders the same frame (until :meth:`Method.finished`); its
+   linear HDR frame and its display image are kept.
+2. The reference (methods/reference.py) accumulates until the stopping rule
+   holds (render/stopping.py): by default until its noise is under a tenth of
+   every method's error against it (judged at its checkpoints), strictly
+   until its successive-half change is below ``tolerance``; under either rule
+   it also stops on its sample budget (``max_samples``) or time limit
+   (``time_limit``). A progress line shows the noise, each method's error and
+   the time left. Its coverage is the reflector mask; an empty mask (the
+   camera sees no reflector) is an error. With the cache on (the CLI's
+   default), the accumulation is saved as it goes and a later run with the
+   same inputs resumes it (render/reference_cache.py).
+3. Every method is measured against the reference with core/metrics.py
+   (PSNR, SSIM, FLIP on the display images over the mask).
+4. Each method is timed by the bench code path (render/bench.py: wall clock
    with ``ctx.finish()`` at both ends, median of ``frames`` frames after
    ``warmup``); the reference's time per frame is the median of its own
    accumulation frames, measured the same way.
@@ -28,9 +32,11 @@ Parameter matching
     ``--param lod_bias=…`` sets it.
 
 Reliability
-    A reference that stopped on its sample budget without converging still
-    carries visible Monte Carlo noise, and that noise is part of every metric:
-    the comparison then marks every metric unreliable and says why
+    A method's metrics are reliable when the reference converged or its noise
+    is under :data:`NOISE_SHARE` of the method's median relative error
+    (:func:`_judge`). A reference stopped by its budget or time limit before
+    that still carries Monte Carlo noise that is part of the metrics: they are
+    marked unreliable and the reason is given
     (:attr:`ReferenceRun.unreliable_reason`).
 """
 
@@ -46,7 +52,6 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
-from envstudio.core.env_sampling import LUMINANCE
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
@@ -58,9 +63,23 @@ from envstudio.render.bench import run_bench
 from envstudio.render.display import DISPLAY_PARAMETERS
 from envstudio.render.matching import match_glossiness
 from envstudio.render.session import RenderSession
+from envstudio.render.stopping import (
+    NOISE_RULE,
+    NOISE_SHARE,
+    TOLERANCE_RULE,
+    ReferenceJudge,
+    choose_rule,
+    duration,
+    median_error,
+)
 
-NOISE_SHARE = 0.1
-"""Largest ratio of reference noise to a method's error for its metrics to count as reliable."""
+STOPPED_BY = {
+    "reliable": "every method reliable",
+    "converged": "converged",
+    "max_samples": "sample budget spent",
+    "time_limit": "time limit reached",
+}
+"""What ends the reference's accumulation, as :attr:`ReferenceRun.stopped_by` names it."""
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
 """Parameters listed as "matched" in the report when a method declares them."""
 
@@ -105,6 +124,13 @@ class ReferenceRun:
         Linear radiance of the frame.
     display : (h, w, 3) float32
         The frame as displayed, in [0, 1].
+    stopping_rule : str
+        ``noise`` (the default) or ``tolerance`` (strict), render/stopping.py.
+    stopped_by : str
+        A key of :data:`STOPPED_BY`: what ended the accumulation.
+    wall_s : float
+        Wall time of this run's accumulation, s (what ``time_limit`` counts:
+        ``total_s`` plus the time between frames).
     """
 
     parameters: dict[str, object]
@@ -115,6 +141,9 @@ class ReferenceRun:
     resumed_samples: int
     hdr: npt.NDArray[np.float32]
     display: npt.NDArray[np.float32]
+    stopping_rule: str = TOLERANCE_RULE
+    stopped_by: str = "converged"
+    wall_s: float = 0.0
 
     @property
     def converged(self) -> bool:
@@ -123,16 +152,9 @@ class ReferenceRun:
 
     @property
     def unreliable_reason(self) -> str | None:
-        """Why the metrics cannot be trusted, or None when the reference converged."""
+        """Why marked metrics cannot be trusted, or None when the reference converged."""
         if self.converged:
             return None
-        change = self.status.rms_change
-        measured = (
-            "no convergence check yet (fewer than 2 frames)"
-            if change is None
-            else f"half-change {100 * change:.3g} % > tolerance "
-            f"{100 * float(self.parameters['tolerance']):.3g} %"
-        )
         # batches of one Sobol sequence are negatively correlated: their spread overstates
         bound = (
             ", an upper bound under sequence=sobol"
@@ -140,11 +162,42 @@ class ReferenceRun:
             else ""
         )
         return (
-            f"the reference did not converge within max_samples="
-            f"{self.parameters['max_samples']} spp ({measured}) and its median relative "
-            f"standard error ({100 * self.relative_standard_error:.3g} %{bound}) is not below "
+            f"{self._stop_text()} and its median relative standard error "
+            f"({100 * self.relative_standard_error:.3g} %{bound}) is not below "
             f"{NOISE_SHARE:g} of the marked methods' median relative error, so its Monte Carlo "
-            "noise is part of their metrics (raise max_samples or tolerance)"
+            f"noise is part of their metrics ({self._advice()})"
+        )
+
+    def _stop_text(self) -> str:
+        """How the reference stopped short, with the half-change under the tolerance rule."""
+        if self.stopped_by == "time_limit":
+            text = (
+                f"the reference reached its time limit of {float(self.parameters['time_limit']):g}"
+                " s before it converged"
+            )
+        else:
+            text = (
+                f"the reference did not converge within max_samples="
+                f"{self.parameters['max_samples']} spp"
+            )
+        if self.stopping_rule != TOLERANCE_RULE:
+            return text
+        change = self.status.rms_change
+        measured = (
+            "no convergence check yet (fewer than 2 frames)"
+            if change is None
+            else f"half-change {100 * change:.3g} % > tolerance "
+            f"{100 * float(self.parameters['tolerance']):.3g} %"
+        )
+        return f"{text} ({measured})"
+
+    def _advice(self) -> str:
+        """What to raise to get reliable numbers."""
+        raised = "--time-limit" if self.stopped_by == "time_limit" else "max_samples"
+        return (
+            f"raise {raised} or tolerance"
+            if self.stopping_rule == TOLERANCE_RULE
+            else (f"raise {raised}")
         )
 
 
@@ -285,8 +338,10 @@ def run_comparison(
     warmup: int = 3,
     progress: bool = False,
     cache: bool = False,
+    strict: bool = False,
+    time_limit_s: float | None = None,
 ) -> Comparison:
-    """Render the reference and ``names`` at the session's camera and compare them.
+    """Render ``names`` and the reference at the session's camera and compare them.
 
     Parameters
     ----------
@@ -301,9 +356,14 @@ def run_comparison(
     frames, warmup
         Timed and untimed frames per method.
     progress
-        Show a progress bar on stderr while the reference converges.
+        Show a progress line on stderr while the reference accumulates.
     cache
         Resume the reference from, and save it to, render/reference_cache.py.
+    strict
+        Stop the reference by its tolerance, not by the methods' errors
+        (render/stopping.py; an explicit ``tolerance`` in ``plan`` does too).
+    time_limit_s
+        The reference's time limit in seconds (its ``time_limit``; None keeps ``plan``'s).
 
     Raises
     ------
@@ -314,24 +374,20 @@ def run_comparison(
         session.renderer.display[name] = value
     reference = session.method(ReferenceMethod.name)
     reference.values.update(plan.methods[ReferenceMethod.name])
-    ref_run, mask = _converge(session, reference, size, progress, cache)
-    frames_of: dict[str, tuple[Method, str | None, npt.NDArray, npt.NDArray]] = {}
-    for name in names:
-        if name == ReferenceMethod.name:
-            frames_of[name] = (reference, None, ref_run.hdr, ref_run.display)
-            continue
-        method = session.method(name)
-        method.values.update(plan.methods[name])
-        glossiness = None
-        if "lod_bias" not in plan.methods[name]:
-            glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
-        session.render_offscreen(method, size)
-        while not method.finished():
-            session.render_offscreen(method, size)
-        frames_of[name] = (method, glossiness, session.read_hdr(), _display_image(session, size))
-    timings = _time_methods(
-        session, [n for n in frames_of if n != ReferenceMethod.name], size, frames, warmup
-    )
+    if time_limit_s is not None:
+        reference.values["time_limit"] = time_limit_s
+    rendered = {
+        name: _render_method(session, name, plan.methods[name], reference, size)
+        for name in names
+        if name != ReferenceMethod.name
+    }
+    rule = choose_rule(list(names), plan.methods[ReferenceMethod.name], strict)
+    judge = ReferenceJudge(rule, {name: frame[2] for name, frame in rendered.items()})
+    ref_run, mask = _converge(session, reference, size, progress, cache, judge)
+    frames_of = {
+        name: rendered.get(name, (reference, None, ref_run.hdr, ref_run.display)) for name in names
+    }
+    timings = _time_methods(session, list(rendered), size, frames, warmup)
     timings[ReferenceMethod.name] = (
         _summary(ref_run.frames_ms),
         "median of its accumulation frames",
@@ -368,6 +424,32 @@ def run_comparison(
     )
 
 
+def _render_method(
+    session: RenderSession,
+    name: str,
+    values: dict[str, object],
+    reference: ReferenceMethod,
+    size: tuple[int, int],
+) -> tuple[Method, str | None, npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+    """Render method ``name`` with ``values`` until finished, glossiness matched to ``reference``.
+
+    Returns
+    -------
+    tuple
+        The method, how its ``lod_bias`` was matched (or None), its linear HDR
+        frame and its display image.
+    """
+    method = session.method(name)
+    method.values.update(values)
+    glossiness = None
+    if "lod_bias" not in values:
+        glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
+    session.render_offscreen(method, size)
+    while not method.finished():
+        session.render_offscreen(method, size)
+    return method, glossiness, session.read_hdr(), _display_image(session, size)
+
+
 def _judge(
     result: MethodResult, reference: ReferenceRun, mask: npt.NDArray[np.bool_]
 ) -> MethodResult:
@@ -377,9 +459,10 @@ def _judge(
     (its median relative standard error) is below :data:`NOISE_SHARE` of the
     method's median relative error over the mask: the measured difference is
     then the method's, not the reference's noise. The reference compared with
-    itself is exact.
+    itself is exact. The same test as the noise rule's (render/stopping.py),
+    on the same numbers when the reference stopped by it.
     """
-    result.median_relative_error = float(np.median(result.relative_error[mask]))
+    result.median_relative_error = median_error(result.hdr, reference.hdr, mask)
     result.reliable = (
         reference.converged
         or result.name == ReferenceMethod.name
@@ -394,64 +477,102 @@ def _converge(
     size: tuple[int, int],
     progress: bool,
     cache: bool,
+    judge: ReferenceJudge,
 ) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
-    """Accumulate until finished (resumed and saved with ``cache``); the run and the mask.
+    """Accumulate until ``judge``'s rule or the reference stops it; the run and the mask.
 
-    Raises on an empty mask.
+    Resumed and saved with ``cache``. Raises on an empty mask.
     """
-    budget = int(reference.values["max_samples"])
     frames_ms: list[float] = []
     checkpoint = reference_cache.Checkpoint(session, reference, size) if cache else None
     with (
         tqdm(
-            total=budget,
             desc="reference",
-            unit="spp",
+            unit="frame",
             file=sys.stderr,
             disable=not progress,
-            bar_format="{desc}: {percentage:3.0f}% of budget {elapsed} {postfix}",
+            bar_format="{desc}: {elapsed}{postfix}",
         ) as bar,
         checkpoint.saved_on_interrupt() if checkpoint else contextlib.nullcontext(),
     ):
         frames_ms.append(_timed_frame(session, reference, size))
-        if not reference.coverage().any():
-            camera = session.camera
-            raise ParameterError(
-                f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
-                f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
-            )
+        mask = _reflector_mask(session, reference)
         while True:
-            bar.update(reference.status.samples - bar.n)
-            bar.set_postfix_str(reference.status_line())
-            if reference.finished():
+            if judge.due(reference.status.batches):
+                judge.judge(reference, session.read_hdr(), mask)
+            if progress:
+                bar.set_postfix_str(_progress_line(reference, judge), refresh=False)
+                bar.update()
+            if reference.finished() or judge.satisfied():
                 break
             frames_ms.append(_timed_frame(session, reference, size))
             if checkpoint:
                 checkpoint.save_if_due()
+    wall_s = reference.status.run_elapsed()
     resumed = 0
     if checkpoint:
         checkpoint.save()
         resumed = checkpoint.resumed_samples
     if resumed:
         print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
-    print(f"reference: {reference.status_line()}", file=sys.stderr)
-    mask = reference.coverage()
-    estimate_y = reference.estimate()[mask] @ LUMINANCE
-    error_y = reference.standard_error()[mask] @ LUMINANCE
-    lit = estimate_y > 0
+    stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
+    noise = reference.relative_standard_error()
+    print(f"reference: {_stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
     run = ReferenceRun(
         parameters=reference.values.as_dict(),
         status=replace(reference.status),
         frames_ms=frames_ms,
         total_s=sum(frames_ms) / 1e3,
-        relative_standard_error=float(np.median(error_y[lit] / estimate_y[lit]))
-        if lit.any()
-        else float("inf"),
+        relative_standard_error=noise,
         resumed_samples=resumed,
         hdr=session.read_hdr(),
         display=_display_image(session, size),
+        stopping_rule=judge.rule,
+        stopped_by=stopped_by,
+        wall_s=wall_s,
     )
     return run, mask
+
+
+def _reflector_mask(session: RenderSession, reference: ReferenceMethod) -> npt.NDArray[np.bool_]:
+    """The reference's coverage after its first frame.
+
+    Raises
+    ------
+    ParameterError
+        If it is empty: the camera sees no reflector.
+    """
+    mask = reference.coverage()
+    if not mask.any():
+        camera = session.camera
+        raise ParameterError(
+            f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
+            f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
+        )
+    return mask
+
+
+def _stop_line(reference: ReferenceMethod, noise: float, wall_s: float, stopped_by: str) -> str:
+    """Where the reference stopped: samples, time, noise, half-change, and why."""
+    status = reference.status
+    change = "—" if status.rms_change is None else f"{100 * status.rms_change:.3g} %"
+    state = "converged" if status.converged else "NOT converged"
+    noise_text = f"{100 * noise:.3g} %" if np.isfinite(noise) else "—"
+    return (
+        f"{status.samples} spp in {wall_s:.1f} s, noise {noise_text}, half-change {change} "
+        f"({state}); stopped: {STOPPED_BY[stopped_by]}"
+    )
+
+
+def _progress_line(reference: ReferenceMethod, judge: ReferenceJudge) -> str:
+    """The reference's status and, once judged, the noise, every method's error and time left."""
+    line = judge.progress_line()
+    if judge.rule != NOISE_RULE or not line:
+        return f"{reference.status_line()}; {line}" if line else reference.status_line()
+    limit = float(reference.values["time_limit"])
+    if limit > 0:
+        line += f"; time limit in {duration(limit - reference.status.run_elapsed())}"
+    return f"{reference.status.samples} spp, {line}"
 
 
 def _time_methods(

@@ -13,9 +13,13 @@ Written into one folder, every file atomically::
 Heat maps colour only the reflector's pixels; the rest shows the reference
 dimmed to grey. In the JSON, PSNR of identical images is the string ``"inf"``
 (JSON has no infinity) and numbers are plain floats; ``reliable`` is false and
-``unreliable_reason`` says why when the reference did not converge. The
-Markdown table is what the command prints; unreliable metrics carry a dagger (†)
-and the reason follows the table.
+``unreliable_reason`` says why (null when every method is reliable). The
+reference's ``stopping_rule`` (``noise``: its noise under a tenth of every
+method's error, the default; ``tolerance``: the successive-half change, strict),
+``stopped_by`` (``reliable``, ``converged``, ``max_samples``, ``time_limit``) and
+``relative_standard_error`` (the noise reached) are stated in the JSON and on the
+table's ``reference:`` line. The Markdown table is what the command prints;
+unreliable metrics carry a dagger (†) and the reason follows the table.
 """
 
 from __future__ import annotations
@@ -33,8 +37,9 @@ from envstudio.core.colormap import MAGMA_STOPS, magma
 from envstudio.core.env_sampling import LUMINANCE
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import write_image
-from envstudio.render.compare import Comparison, MethodResult
+from envstudio.render.compare import STOPPED_BY, Comparison, MethodResult
 from envstudio.render.split_view import SplitSettings
+from envstudio.render.stopping import NOISE_RULE, NOISE_SHARE
 
 HEAT_SCALE = SplitSettings().heat_scale
 """Relative error at the top of the colour scale of ``*.relerr.png`` (the viewer's default)."""
@@ -169,7 +174,7 @@ def to_json(comparison: Comparison) -> dict:
         "device": comparison.device,
         "mask_pixels": int(comparison.mask.sum()),
         "reliable": comparison.reliable,
-        "unreliable_reason": ref.unreliable_reason,
+        "unreliable_reason": None if comparison.reliable else ref.unreliable_reason,
         "metrics": METRIC_NOTES,
         "reference": {
             "parameters": ref.parameters,
@@ -177,8 +182,11 @@ def to_json(comparison: Comparison) -> dict:
             "batches": ref.status.batches,
             "rms_change": ref.status.rms_change,
             "converged": ref.status.converged,
+            "stopping_rule": ref.stopping_rule,
+            "stopped_by": ref.stopped_by,
             "frames": len(ref.frames_ms),
             "total_s": ref.total_s,
+            "wall_s": ref.wall_s,
             "relative_standard_error": _number(ref.relative_standard_error),
             "resumed_samples": ref.resumed_samples,
             "files": {"exr": "reference.exr", "png": "reference.png"},
@@ -289,16 +297,31 @@ def _card(title: str, image: str, caption: str) -> str:
 
 
 def _reference_line(comparison: Comparison) -> str:
+    """Samples and time, the stopping rule and what stopped it, the noise, the half-change."""
     ref = comparison.reference
     change = ref.status.rms_change
     state = "converged" if ref.converged else "NOT converged"
     half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
-    return (
-        f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s), {half} "
-        f"(tolerance {100 * float(ref.parameters['tolerance']):.3g} %, budget "
-        f"{ref.parameters['max_samples']} spp): {state}; median relative standard error "
-        f"{100 * ref.relative_standard_error:.3g} %"
+    limit = float(ref.parameters.get("time_limit", 0.0))
+    budget = f"budget {ref.parameters['max_samples']} spp" + (
+        f", time limit {limit:g} s" if limit > 0 else ""
     )
+    return (
+        f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s); "
+        f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: {STOPPED_BY[ref.stopped_by]}; "
+        f"noise (median relative standard error) {_percent(ref.relative_standard_error)}; {half} "
+        f"(tolerance {100 * float(ref.parameters['tolerance']):.3g} %, {budget}): {state}"
+    )
+
+
+def _rule_text(rule: str) -> str:
+    if rule == NOISE_RULE:
+        return f"noise < {NOISE_SHARE:g} × each method's median relative error (default)"
+    return "half-change < tolerance (strict)"
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.3g} %" if math.isfinite(value) else "—"
 
 
 def _matched_text(result: MethodResult) -> str:
