@@ -168,8 +168,10 @@ uniform int u_chunk_first;
 uniform int u_chunk_samples;
 
 void main() {
-    // the face normal at the pixel centre (derivatives before any divergent control flow)
+    // the face normal at the pixel centre, oriented by the triangle's winding as
+    // hit_face_normal() is (derivatives before any divergent control flow)
     vec3 centre_face = cross(dFdx(v_world_position), dFdy(v_world_position));
+    if (!gl_FrontFacing) centre_face = -centre_face;
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     vec3 batch = vec3(0.0);
     int multiplier = 1;
@@ -204,8 +206,12 @@ void main() {
         // Two-sided: the side of the face the camera sees. A shading normal
         // still turned away from the viewer (silhouettes of smooth-shaded
         // meshes) reflects nothing, as in a path tracer's shading frame.
-        if (dot(g, v) < 0.0) n = -n;
+        if (dot(g, v) < 0.0) {
+            n = -n;
+            g = -g;
+        }
         if (dot(n, v) <= 0.0) continue;
+        g_path_face = normalize(g);
         g_path_sample = g_first_sample + uint(i);
         g_path_stream = 0u;
         vec3 r = reflect(-v, n);

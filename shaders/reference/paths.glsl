@@ -5,7 +5,11 @@
 // Directions below the surface (the part of the eq. 7 lobe under the horizon)
 // are blocked by the surface itself: no light arrives from inside the object
 // (seed 000 eq. 1 integrates over the hemisphere above the surface; without
-// tracing the lobe is left whole, as the prefiltered-map methods use it). A
+// tracing the lobe is left whole, as the prefiltered-map methods use it).
+// "Below" is below the shading normal's plane or below the triangle's own
+// plane, whichever cuts more: a direction under the face enters the mesh, as
+// a path tracer finds by intersecting it (bunny, direct light at n.v 0.1-0.5:
+// 2.1-2.2 % brighter than Mitsuba with the shading plane alone). A
 // local object returns its diffuse radiance albedo/pi * E_sh9(n), as the frame
 // draws it. A reflector hit continues with the material's own BRDF, sampled as
 // at the first hit (material.glsl), as a path tracer does: up to
@@ -23,6 +27,8 @@ uniform int u_trace_bounces;
 uvec2 g_path_pixel;
 uint g_path_sample;
 uint g_path_stream;
+// The face normal at the first hit, on the side the camera sees (set by the caller).
+vec3 g_path_face;
 
 vec3 path_random3() {
     uvec3 h = pcg3d(uvec3(g_path_pixel.x ^ (g_path_stream << 16u), g_path_pixel.y, g_path_sample));
@@ -31,7 +37,7 @@ vec3 path_random3() {
 }
 
 vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
-    if (dot(n, l) <= 0.0) return vec3(0.0);
+    if (dot(n, l) <= 0.0 || dot(g_path_face, l) <= 0.0) return vec3(0.0);
     vec3 origin = p + n * u_ray_offset;
     vec3 direction = l;
     float throughput = 1.0;
@@ -43,15 +49,24 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
             return throughput * environment_radiance(direction);
         }
         vec3 hit_normal = hit_shading_normal(tri, uv);
-        if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
         vec4 info = trace_triangles[7 * tri + 6];
         if (info.a < 0.5) {
+            if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
             return throughput * info.rgb / PI * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
         }
+        // a reflector: the side of the face the path arrives at, as at the first hit
+        vec3 face = hit_face_normal(tri);
+        if (dot(face, direction) > 0.0) {
+            face = -face;
+            hit_normal = -hit_normal;
+        }
+        if (dot(hit_normal, direction) >= 0.0) return vec3(0.0);
         float weight;
         vec3 next = sample_reflector(direction, hit_normal, path_random3(), weight);
         // the surface blocks what the lobe reaches below it, as at the first hit
-        if (weight <= 0.0 || dot(next, hit_normal) <= 0.0) return vec3(0.0);
+        if (weight <= 0.0 || dot(next, hit_normal) <= 0.0 || dot(next, face) <= 0.0) {
+            return vec3(0.0);
+        }
         throughput *= weight;
         origin = origin + t * direction + hit_normal * u_ray_offset;
         direction = next;
