@@ -2,8 +2,13 @@
 
 Every function sums over all texels of a (downsampled) lat-long map with their
 exact solid angles (core.latlong.texel_solid_angles), in chunks so memory stays
-bounded. They are slow and simple on purpose: tests and the glossiness fit
-compare the GPU estimators and the hardware approximations against them.
+bounded. :func:`irradiance`, :func:`phong` and :func:`microfacet` are float64
+and simple on purpose: tests and the glossiness fit compare the GPU estimators
+and the hardware approximations against them. :func:`prefilter` is the brute
+force of seed 004 §5.1 ("for every pixel in the target environment map, the
+filter is applied to every single pixel in the source environment map") for a
+whole target map: float32, chunked over target texels on every core, with a
+progress bar; tests check it against the float64 sums.
 """
 
 from __future__ import annotations
@@ -13,8 +18,16 @@ import numpy.typing as npt
 
 from envstudio.core import latlong
 from envstudio.core.env_sampling import box_downsample
+from envstudio.prefilter.kernels import Kernel
+from envstudio.prefilter.parallel import run_chunks
 
 _CHUNK = 2048
+# prefilter(): target texels per thread task, and per block of one task (the block's
+# (block, source texels) float32 cosines stay in the cache: 16 × 32768 × 4 B = 2 MiB).
+_TASK = 256
+_BLOCK = 16
+# Source texels per piece: larger maps are summed piece by piece to stay in the cache.
+_SOURCE_PIECE = 32768
 
 
 def downsample_latlong(image: npt.ArrayLike, height: int) -> npt.NDArray[np.float64]:
@@ -32,6 +45,92 @@ def _texels(image: npt.ArrayLike):
     dirs = latlong.texel_directions(h, w).reshape(-1, 3)
     weighted = img.reshape(-1, 3) * latlong.texel_solid_angles(h, w).reshape(-1, 1)
     return dirs, weighted
+
+
+def prefilter(
+    image: npt.ArrayLike,
+    directions: npt.ArrayLike,
+    kernel: Kernel,
+    *,
+    threads: int | None = None,
+    progress: bool = False,
+) -> npt.NDArray[np.float32]:
+    """Brute-force prefiltered map E(r) = Σ_s k(⟨r, l_s⟩) L_s Δω_s over every source texel.
+
+    The discrete form of seed 004 §4's L_diffuse, L_phong and L_isotropic (2D):
+    the kernel (prefilter.kernels) weighted by each texel's exact solid angle
+    Δω_s (core.latlong.texel_solid_angles). Cosines and kernel in float32, the
+    sums by BLAS in float32 blocks of 16 targets × all source texels.
+
+    Parameters
+    ----------
+    image
+        (h, w, 3) lat-long radiance (the source L_i).
+    directions
+        (..., 3) unit target directions (r for Phong and lobes, n for diffuse).
+    kernel
+        The filter.
+    threads
+        Worker threads (default: every core).
+    progress
+        Show a progress bar with the time left on stderr.
+
+    Returns
+    -------
+    (..., 3) float32
+        Prefiltered radiance at ``directions``.
+    """
+    dirs, weighted = _texels(image)
+    src = np.ascontiguousarray(dirs.T, dtype=np.float32)
+    weights_t = np.ascontiguousarray(weighted.T, dtype=np.float32)
+    q = np.asarray(directions, dtype=np.float32)
+    flat = q.reshape(-1, 3)
+    out = np.empty((len(flat), 3), np.float32)
+    starts = range(0, len(flat), _TASK)
+
+    pieces = [slice(s, s + _SOURCE_PIECE) for s in range(0, src.shape[1], _SOURCE_PIECE)]
+
+    def work(k: int) -> None:
+        start = starts[k]
+        stop = min(start + _TASK, len(flat))
+        cos = np.empty((_BLOCK, min(_SOURCE_PIECE, src.shape[1])), np.float32)
+        sums = np.zeros((stop - start, 3), np.float32)
+        for piece in pieces:
+            for b in range(start, stop, _BLOCK):
+                block = flat[b : min(b + _BLOCK, stop)]
+                c = cos[: len(block), : src[0, piece].size]
+                cosines_into(block, src[:, piece], c)
+                sums[b - start : b - start + len(block)] += weighted_sums(
+                    kernel.shape_inplace(c), weights_t[:, piece]
+                )
+        out[start:stop] = sums * np.float32(kernel.scale)
+
+    run_chunks(
+        work,
+        [min(_TASK, len(flat) - s) for s in starts],
+        threads=threads,
+        progress=progress,
+        desc="brute force",
+    )
+    return out.reshape(*q.shape[:-1], 3)
+
+
+def cosines_into(queries: np.ndarray, sources: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """⟨q, d⟩ for (m, 3) float32 queries and (3, n) float32 sources into (m, n) float32 ``out``.
+
+    One BLAS product; with BLAS on one thread (prefilter.parallel) it runs at
+    about a nanosecond per pair, several times the speed of broadcast multiply-adds.
+    """
+    return np.dot(queries, sources, out=out)
+
+
+def weighted_sums(values: np.ndarray, weights_t: np.ndarray) -> np.ndarray:
+    """(m, n) float32 filter values times (3, n) float32 weights → (m, 3): Σ_n F W.
+
+    Written as (Wᵀ Fᵀ)ᵀ: OpenBLAS is about ten times faster on that shape than
+    on F @ W with its inner dimension of n and three columns.
+    """
+    return (weights_t @ values.T).T
 
 
 def _kernel_sum(image, queries, kernel) -> npt.NDArray[np.float64]:

@@ -1,0 +1,78 @@
+"""DirectDraw Surface output: a cube map with its mip chain, DX10 header, RGBA16F.
+
+The layout (Microsoft's "DDS file layout for cubic environment maps"): the
+magic ``DDS ``, DDS_HEADER (124 bytes), DDS_HEADER_DXT10 (20 bytes), then for
+each face in the order +X, −X, +Y, −Y, +Z, −Z its whole mip chain, largest
+level first, each level its rows top to bottom, each texel four IEEE half
+floats R, G, B, A (A = 1). Face k of a DDS cube is the image OpenGL reads as
+face k (engines upload them as they are), and core.cubemap's face arrays are
+in the same order and orientation, so no face is flipped or swapped.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.io.atomic import atomic_path
+
+__all__ = ["DXGI_FORMAT_R16G16B16A16_FLOAT", "write_dds_cube"]
+
+DXGI_FORMAT_R16G16B16A16_FLOAT = 10
+_DDSD = 0x1 | 0x2 | 0x4 | 0x8 | 0x1000 | 0x20000  # CAPS HEIGHT WIDTH PITCH PIXELFORMAT MIPMAPCOUNT
+_DDPF_FOURCC = 0x4
+_DDSCAPS = 0x8 | 0x1000 | 0x400000  # COMPLEX TEXTURE MIPMAP
+_DDSCAPS2_CUBEMAP_ALLFACES = 0x200 | 0xFC00
+_D3D10_RESOURCE_DIMENSION_TEXTURE2D = 3
+_D3D10_RESOURCE_MISC_TEXTURECUBE = 0x4
+
+
+def write_dds_cube(path: str | os.PathLike, levels: Sequence[npt.ArrayLike]) -> Path:
+    """Write a cube map and its mip chain as a DX10 RGBA16F DDS file, atomically.
+
+    Parameters
+    ----------
+    path
+        Output ``.dds``.
+    levels
+        Mip levels, largest first: level k a (6, n_k, n_k, 3) array of linear
+        radiance in core.cubemap's face order, n_k = max(1, n_0 >> k).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    arrays = [np.asarray(level, dtype=np.float32) for level in levels]
+    n = arrays[0].shape[1]
+    for k, level in enumerate(arrays):
+        expected = (6, max(1, n >> k), max(1, n >> k), 3)
+        if level.shape != expected:
+            raise ValueError(f"mip level {k} must be {expected}, got {level.shape}")
+    pixel_format = struct.pack("<II4s5I", 32, _DDPF_FOURCC, b"DX10", 0, 0, 0, 0, 0)
+    header = (
+        struct.pack("<7I", 124, _DDSD, n, n, n * 8, 0, len(arrays))
+        + bytes(44)
+        + pixel_format
+        + struct.pack("<5I", _DDSCAPS, _DDSCAPS2_CUBEMAP_ALLFACES, 0, 0, 0)
+    )
+    dx10 = struct.pack(
+        "<5I",
+        DXGI_FORMAT_R16G16B16A16_FLOAT,
+        _D3D10_RESOURCE_DIMENSION_TEXTURE2D,
+        _D3D10_RESOURCE_MISC_TEXTURECUBE,
+        1,
+        0,
+    )
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        f.write(b"DDS " + header + dx10)
+        for face in range(6):
+            for level in arrays:
+                rgba = np.concatenate([level[face], np.ones((*level.shape[1:3], 1))], axis=-1)
+                f.write(rgba.astype("<f2").tobytes())
+    return Path(path)

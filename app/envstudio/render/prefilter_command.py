@@ -1,0 +1,299 @@
+"""``envstudio prefilter`` and ``envstudio bench --prefilter``: checks, run, output.
+
+Bad input raises ParameterError / InputFileError (one line, exit status 2) before
+any work starts. The EXR is written only when the map is complete, through
+io.atomic, so a Ctrl-C leaves no file (partial or temporary) behind.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from envstudio.errors import ParameterError
+from envstudio.io.atomic import check_output_path, write_text_atomic
+from envstudio.io.images import read_environment, write_image
+from envstudio.prefilter import brute_force, hierarchical, kernels
+from envstudio.prefilter.targets import target_directions, target_picture, target_shape
+
+__all__ = ["check_memory", "kernel_from_args", "run_prefilter", "run_prefilter_bench"]
+
+#: Largest face edge: the GL_MAX_TEXTURE_SIZE of current GPUs and of llvmpipe.
+MAX_SIZE = 16384
+
+
+def kernel_from_args(args: argparse.Namespace) -> kernels.Kernel:
+    """The kernel named by ``--kernel`` with its ``--exponent`` / ``--lobe`` / ``--kd``."""
+    if args.kernel == "phong":
+        if args.exponent is None:
+            raise ParameterError("--kernel phong needs --exponent N (a Phong exponent > 0)")
+        return kernels.phong(args.exponent)
+    if args.exponent is not None and not args.exponent > 0:
+        raise ParameterError(f"--exponent {args.exponent:g}: expected a Phong exponent > 0")
+    if args.kernel == "lobe":
+        if not args.lobe:
+            raise ParameterError("--kernel lobe needs --lobe TABLE.csv (rows: cosine, value)")
+        return kernels.read_lobe_table(args.lobe)
+    return kernels.diffuse(args.kd)
+
+
+def check_memory(target_texels: int, source_texels: int) -> None:
+    """Refuse a map that would need more memory than the machine has free.
+
+    The estimate: the float32 target and its picture (24 B a texel), the source,
+    its pyramid and float64 copies (about 100 B a texel), and per thread the
+    scratch of a block of cosines (16 × source texels × 8 B).
+
+    Raises
+    ------
+    ParameterError
+        Naming both amounts, in MiB.
+    """
+    threads = os.cpu_count() or 1
+    need = 24 * target_texels + 100 * source_texels + threads * 16 * 8 * source_texels
+    try:
+        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return
+    if need > free:
+        raise ParameterError(
+            f"--size/--source-height: this prefilter needs about {need / 2**20:.0f} MiB of memory "
+            f"and {free / 2**20:.0f} MiB are free; choose a smaller --size or --source-height"
+        )
+
+
+def _check_shared(args: argparse.Namespace) -> None:
+    """The checks a single map and a chain share: threshold, border, threads, source height."""
+    if not 0.0 < args.threshold < 1.0:
+        raise ParameterError(f"--threshold {args.threshold:g}: expected a number in (0, 1)")
+    if args.param == "paraboloid":
+        if not 0 <= args.border < args.size / 2:
+            raise ParameterError(
+                f"--border {args.border}: expected 0 <= border < size/2 = {args.size / 2:g}"
+            )
+    elif args.border:
+        raise ParameterError(f"--border {args.border}: only a paraboloid target has a border")
+    if args.threads is not None and not 1 <= args.threads <= 256:
+        raise ParameterError(f"--threads {args.threads}: expected 1..256")
+    if args.source_height is not None and args.source_height < 1:
+        raise ParameterError(f"--source-height {args.source_height}: expected a positive number")
+
+
+def _checked_args(args: argparse.Namespace) -> kernels.Kernel:
+    _check_shared(args)
+    if not 1 <= args.size <= MAX_SIZE:
+        raise ParameterError(
+            f"--size {args.size}: expected 1..{MAX_SIZE} (the largest GL texture edge)"
+        )
+    return kernel_from_args(args)
+
+
+def _source(args: argparse.Namespace) -> np.ndarray:
+    """The ``--env`` map, box-filtered to ``--source-height`` rows when given."""
+    radiance = read_environment(args.env)
+    if args.source_height is not None:
+        if radiance.shape[0] % args.source_height:
+            raise ParameterError(
+                f"--source-height {args.source_height}: expected a divisor of the map's "
+                f"{radiance.shape[0]} rows"
+            )
+        radiance = brute_force.downsample_latlong(radiance, args.source_height)
+    return radiance
+
+
+def run_prefilter(args: argparse.Namespace) -> int:
+    """``envstudio prefilter``: one prefiltered map, written as linear EXR."""
+    if args.chain:
+        return run_chain(args)
+    kernel = _checked_args(args)
+    output = check_output_path(args.output)
+    if output.suffix.lower() != ".exr":
+        raise ParameterError(f"-o {output}: expected an .exr file name")
+    radiance = _source(args)
+    faces, rows, cols = target_shape(args.param, args.size)
+    check_memory(faces * rows * cols, radiance.shape[0] * radiance.shape[1])
+    directions = target_directions(args.param, args.size, args.border)
+    progress = sys.stderr.isatty()
+    start = time.perf_counter()
+    if args.algo == "brute":
+        maps = brute_force.prefilter(
+            radiance, directions, kernel, threads=args.threads, progress=progress
+        )
+    else:
+        maps = hierarchical.prefilter(
+            radiance, directions, kernel, args.threshold, threads=args.threads, progress=progress
+        )
+    seconds = time.perf_counter() - start
+    write_image(output, target_picture(args.param, maps))
+    what = f"N = {kernel.exponent:g}" if kernel.name == "phong" else kernel.name
+    print(
+        f"{output}: {args.param} {faces}x{rows}x{cols} {what} from a "
+        f"{radiance.shape[1]}x{radiance.shape[0]} lat-long, {args.algo} in {seconds:.2f} s"
+    )
+    return 0
+
+
+def run_chain(args: argparse.Namespace) -> int:
+    """``envstudio prefilter --chain``: the Phong cube mip chain, its SH, and the check."""
+    from envstudio.core.cubemap import faces_to_cross
+    from envstudio.core.sh import project_latlong_sh9
+    from envstudio.io.dds import write_dds_cube
+    from envstudio.prefilter.chain import gloss_exponents, prefiltered_chain
+
+    if args.param != "cube" or args.kernel != "phong" or args.exponent is not None:
+        raise ParameterError(
+            "--chain: a Phong cube chain (--param cube, no --exponent: N comes from "
+            "--gloss-scale and --gloss-bias per level)"
+        )
+    size = args.size
+    if size < 1 or size & (size - 1) or size > MAX_SIZE:
+        raise ParameterError(f"--size {size}: --chain needs a power of two in 1..{MAX_SIZE}")
+    most = size.bit_length()
+    if not 1 <= args.levels <= most:
+        raise ParameterError(f"--levels {args.levels}: expected 1..{most} for --size {size}")
+    if not 0 < args.gloss_scale <= 20 or not -10 <= args.gloss_bias <= 20:
+        raise ParameterError(
+            f"--gloss-scale {args.gloss_scale:g} --gloss-bias {args.gloss_bias:g}: "
+            "expected a scale in (0, 20] and a bias in [-10, 20]"
+        )
+    _check_shared(args)
+    if max(gloss_exponents(args.levels, args.gloss_scale, args.gloss_bias)) > 1e5:
+        raise ParameterError(
+            f"--gloss-scale {args.gloss_scale:g} --gloss-bias {args.gloss_bias:g}: level 0's "
+            "exponent would exceed 100000"
+        )
+    output = check_output_path(args.output)
+    suffix = output.suffix.lower()
+    if suffix not in (".dds", ".exr"):
+        raise ParameterError(f"-o {output}: expected a .dds or .exr file name")
+    radiance = _source(args)
+    check_memory(6 * size * size * 2, radiance.shape[0] * radiance.shape[1])
+    start = time.perf_counter()
+    chain = prefiltered_chain(
+        radiance,
+        size,
+        args.levels,
+        args.gloss_scale,
+        args.gloss_bias,
+        args.threshold,
+        threads=args.threads,
+        progress=sys.stderr.isatty(),
+    )
+    seconds = time.perf_counter() - start
+    if suffix == ".dds":
+        written = [write_dds_cube(output, [level.faces for level in chain])]
+    else:
+        written = [
+            write_image(output.with_name(f"{output.stem}_mip{k}.exr"), faces_to_cross(level.faces))
+            for k, level in enumerate(chain)
+        ]
+    sh = {
+        "environment": str(args.env),
+        "order": "seed 000 eq. 9: Y0; Y1..Y3 = y, z, x; Y4, Y5, Y7 = xy, yz, xz; "
+        "Y6 = 3z^2 - 1; Y8 = x^2 - y^2",
+        "coefficients": project_latlong_sh9(radiance).tolist(),
+    }
+    sh_path = output.with_name(f"{output.stem}.sh.json")
+    write_text_atomic(sh_path, json.dumps(sh, indent=2) + "\n")
+    print(f"{', '.join(map(str, written))}, {sh_path}: {len(chain)} levels in {seconds:.2f} s")
+    for k, level in enumerate(chain):
+        line = (
+            f"  level {k}: {level.faces.shape[1]}² N = {level.exponent:.4g} "
+            f"from {2 * level.source_rows}x{level.source_rows}"
+        )
+        if args.check:
+            rms, worst = chain_level_error(radiance, level)
+            line += f", vs brute force: rms {100 * rms:.3f} %, max {100 * worst:.3f} % of the mean"
+        print(line)
+    return 0
+
+
+def chain_level_error(radiance: np.ndarray, level, samples: int = 256) -> tuple[float, float]:
+    """RMS and max |level − brute force| over the level's mean, at sampled texels.
+
+    The brute force (prefilter.brute_force.prefilter) sums the full-resolution
+    source at the level's exponent, at ``samples`` texels spread evenly over the
+    faces (every k-th); both errors are relative to the brute-force mean there.
+    """
+    from envstudio.prefilter.targets import target_directions
+
+    n = level.faces.shape[1]
+    directions = target_directions("cube", n).reshape(-1, 3)
+    stride = max(1, len(directions) // samples)
+    truth = brute_force.prefilter(
+        radiance, directions[::stride], kernels.phong(level.exponent)
+    ).astype(np.float64)
+    got = level.faces.reshape(-1, 3)[::stride]
+    mean = truth.mean()
+    return float(np.sqrt(np.mean((got - truth) ** 2)) / mean), float(
+        np.abs(got - truth).max() / mean
+    )
+
+
+def _bench_face(text: str | None) -> int:
+    """``--size FACExWIDTH`` (two faces: WIDTH = 2 FACE) or ``FACE`` → the face edge."""
+    text = text or "128x256"
+    face, _, width = text.lower().partition("x")
+    try:
+        n, w = int(face), int(width or 2 * int(face))
+    except ValueError:
+        n, w = 0, 0
+    if n < 8 or n & (n - 1) or w != 2 * n:
+        raise ParameterError(
+            f"--size {text}: expected FACEx(2*FACE) with FACE a power of two >= 8, e.g. 128x256"
+        )
+    return n
+
+
+def _exponents(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or not all(0 < v <= 1e5 for v in values):
+        raise ParameterError(
+            f"--exponents {text}: expected comma-separated Phong exponents in (0, 100000]"
+        )
+    return values
+
+
+def run_prefilter_bench(args: argparse.Namespace) -> int:
+    """``envstudio bench --prefilter``: seed 004 §5.1's table, JSON and the plot."""
+    from envstudio.render.prefilter_bench import (
+        SWEEP_FACES,
+        format_prefilter_report,
+        run_prefilter_bench,
+        write_scaling_plot,
+    )
+    from envstudio.resources import asset_root
+
+    face = _bench_face(args.size)
+    exponents = _exponents(args.exponents)
+    json_out = check_output_path(args.json_out) if args.json_out else None
+    env = args.env or str(asset_root() / "hdr" / "studio.exr")
+    radiance = read_environment(env)
+    sweep = SWEEP_FACES if json_out else ()
+    for n in (face, *sweep):
+        if radiance.shape[0] % n:
+            raise ParameterError(
+                f"--env {env}: {radiance.shape[0]} rows cannot be box-filtered to {n} "
+                f"(needs a multiple of {max(face, *sweep)})"
+            )
+
+    def say(line: str) -> None:
+        if sys.stderr.isatty():
+            print(line, file=sys.stderr)
+
+    report = run_prefilter_bench(radiance, face, exponents, sweep=sweep, progress=say)
+    report["environment"] = env
+    print(format_prefilter_report(report))
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+        plot = write_scaling_plot(report, json_out.with_suffix(".png"))
+        print(f"{json_out}, {plot}")
+    return 0

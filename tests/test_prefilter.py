@@ -1,0 +1,381 @@
+"""CPU prefilter (seed 004 §4, §5.1): kernels, brute force, hierarchical, the command."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import struct
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from envstudio.cli import main
+from envstudio.core import cubemap, latlong
+from envstudio.io.dds import write_dds_cube
+from envstudio.io.images import read_environment, read_image
+from envstudio.prefilter import brute_force, hierarchical, kernels
+from envstudio.prefilter.chain import gloss_exponents, prefiltered_chain
+from envstudio.prefilter.targets import target_directions, target_picture
+from envstudio.render.prefilter_bench import run_prefilter_bench, write_scaling_plot
+from envstudio.resources import asset_root
+
+SUNRISE = str(asset_root() / "hdr" / "sunrise.exr")
+
+
+def smooth_map(height: int, seed: int) -> np.ndarray:
+    """A positive, smooth random lat-long map: exp of a random low-order polynomial of d."""
+    rng = np.random.default_rng(seed)
+    d = latlong.texel_directions(height)
+    a, b = rng.normal(size=(2, 3, 3))
+    poly = d @ a + 0.7 * (d @ b) ** 2
+    return np.exp(poly).astype(np.float32)
+
+
+def unit_vectors(n: int, seed: int) -> np.ndarray:
+    v = np.random.default_rng(seed).normal(size=(n, 3))
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+@pytest.fixture(scope="module")
+def sunrise_32() -> np.ndarray:
+    return brute_force.downsample_latlong(read_environment(SUNRISE), 32)
+
+
+def lobe_kernel() -> kernels.Kernel:
+    """A non-monotone lobe (a peak and an off-specular bump) to exercise the table path."""
+    c = np.array([-1.0, 0.0, 0.5, 0.7, 0.8, 0.95, 1.0])
+    p = np.array([0.0, 0.0, 0.0, 0.6, 0.1, 0.5, 3.0])
+    return kernels.lobe(c, p)
+
+
+# --- kernels ---------------------------------------------------------------------------------
+
+
+def test_kernel_values():
+    c = np.linspace(-1, 1, 101)
+    phong = kernels.phong(20.0)
+    assert np.allclose(phong(c), 21 / (2 * np.pi) * np.maximum(c, 0) ** 20, rtol=1e-5, atol=1e-9)
+    diffuse = kernels.diffuse(0.5)
+    assert np.allclose(diffuse(c), 0.5 / np.pi * np.maximum(c, 0), rtol=1e-6)
+    lobe = lobe_kernel()
+    table = np.interp(c, [-1, 0, 0.5, 0.7, 0.8, 0.95, 1], [0, 0, 0, 0.6, 0.1, 0.5, 3.0])
+    assert np.allclose(lobe(c), table, atol=2e-3)
+
+
+@pytest.mark.parametrize("kernel", [kernels.phong(50.0), kernels.diffuse(), lobe_kernel()])
+def test_spread_bounds_the_kernel_on_every_interval(kernel):
+    rng = np.random.default_rng(3)
+    ends = np.sort(rng.uniform(-1, 1, size=(200, 2)), axis=1).astype(np.float32)
+    spread = kernel.spread(ends[:, 0].copy(), ends[:, 1].copy())
+    inside = ends[:, :1] + (ends[:, 1:] - ends[:, :1]) * np.linspace(0, 1, 400)
+    values = kernel.shape(inside)
+    assert np.all(spread >= values.max(axis=1) - values.min(axis=1) - 1e-5)  # float32 c^N
+
+
+# --- brute force -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kernel", "expected"),
+    [(kernels.phong(8.0), 1.0), (kernels.diffuse(0.6), 0.6), (kernels.phong(1.0), 1.0)],
+)
+def test_brute_force_constant_environment(kernel, expected):
+    """A constant L gives L for the normalised Phong lobe and k_d L for diffuse (quadrature)."""
+    image = np.full((64, 128, 3), 2.0, np.float32)
+    out = brute_force.prefilter(image, unit_vectors(50, 1), kernel, threads=2)
+    assert np.allclose(out, 2.0 * expected, rtol=2e-3)
+
+
+def test_brute_force_single_texel_is_the_kernel():
+    """One bright texel: the filtered cube is the kernel centred on its direction."""
+    image = np.zeros((16, 32, 3), np.float32)
+    image[5, 11] = (1.0, 2.0, 3.0)
+    kernel = kernels.phong(6.0)
+    out = brute_force.prefilter(image, cubemap.texel_directions(8), kernel)
+    bright = latlong.texel_directions(16)[5, 11]
+    solid = latlong.texel_solid_angles(16)[5, 11]
+    expected = kernel(cubemap.texel_directions(8) @ bright)[..., None] * solid * np.array([1, 2, 3])
+    assert np.allclose(out, expected, rtol=1e-4, atol=1e-7)
+
+
+@pytest.mark.parametrize("exponent", [3.0, 60.0, 400.0])
+def test_brute_force_matches_an_independent_float64_sum(exponent):
+    image = smooth_map(32, seed=int(exponent))
+    queries = unit_vectors(7, 2)
+    out = brute_force.prefilter(image, queries, kernels.phong(exponent))
+    d = latlong.texel_directions(32).reshape(-1, 3)
+    weights = latlong.texel_solid_angles(32).reshape(-1)
+    for q, got in zip(queries, out, strict=True):
+        lobe = (exponent + 1) / (2 * np.pi) * np.power(np.maximum(d @ q, 0.0), exponent)
+        truth = np.einsum("s,s,sc->c", lobe, weights, image.reshape(-1, 3).astype(np.float64))
+        assert np.allclose(got, truth, rtol=2e-4), (got, truth)
+
+
+# --- hierarchical ----------------------------------------------------------------------------
+
+
+def relative_max_difference(a, b) -> float:
+    return float(np.abs(a - b).max() / b.mean())
+
+
+@pytest.mark.parametrize("param", ["paraboloid", "cube"])
+@pytest.mark.parametrize("exponent", [10.0, 200.0])
+def test_hierarchical_matches_brute_force_on_smooth_maps(param, exponent):
+    image = smooth_map(64, seed=7)
+    directions = target_directions(param, 16)
+    kernel = kernels.phong(exponent)
+    brute = brute_force.prefilter(image, directions, kernel)
+    hier = hierarchical.prefilter(image, directions, kernel, 1e-3)
+    assert relative_max_difference(hier, brute) < 0.002
+
+
+@pytest.mark.parametrize("kernel", [kernels.diffuse(), lobe_kernel(), kernels.phong(500.0)])
+def test_hierarchical_matches_brute_force_on_sunrise(sunrise_32, kernel):
+    """A sun-dominated map: within 1 % of the map's mean (the bench's criterion)."""
+    directions = target_directions("paraboloid", 16, 2)
+    brute = brute_force.prefilter(sunrise_32, directions, kernel)
+    hier = hierarchical.prefilter(sunrise_32, directions, kernel, 1e-3, tile=4)
+    assert relative_max_difference(hier, brute) < 0.01
+
+
+def test_hierarchical_threshold_trades_accuracy():
+    image = smooth_map(64, seed=11)
+    directions = target_directions("cube", 8)
+    kernel = kernels.phong(50.0)
+    brute = brute_force.prefilter(image, directions, kernel)
+    loose = hierarchical.prefilter(image, directions, kernel, 0.05)
+    tight = hierarchical.prefilter(image, directions, kernel, 1e-4)
+    assert relative_max_difference(tight, brute) < relative_max_difference(loose, brute)
+    assert relative_max_difference(tight, brute) < 2e-4
+
+
+def test_pyramid_radii_bound_every_texel():
+    pyramid = hierarchical.source_pyramid(smooth_map(16, 0))
+    fine = pyramid.directions[0]
+    for level in range(1, pyramid.top + 1):
+        h, w = pyramid.shapes[level]
+        f = 2**level
+        texels = fine.reshape(3, h, f, w, f)
+        d = pyramid.directions[level].reshape(3, h, 1, w, 1)
+        cos = np.clip(np.sum(texels * d, axis=0), -1, 1)
+        angle = np.arccos(cos).max(axis=(1, 3)).reshape(-1)
+        assert np.all(angle <= np.arccos(pyramid.radii[level][0]) + 1e-4)
+
+
+# --- the command -----------------------------------------------------------------------------
+
+
+def test_prefilter_command_writes_the_map(tmp_path, capsys):
+    out = tmp_path / "para.exr"
+    status = main(
+        ["prefilter", "--env", SUNRISE, "--exponent", "20", "--algo", "brute", "--size", "8",
+         "--border", "1", "--source-height", "32", "-o", str(out)]
+    )  # fmt: skip
+    assert status == 0 and out.exists()
+    picture = read_image(out)
+    source = brute_force.downsample_latlong(read_environment(SUNRISE), 32)
+    maps = brute_force.prefilter(source, target_directions("paraboloid", 8, 1), kernels.phong(20))
+    assert picture.shape == (8, 16, 3)
+    assert np.allclose(picture, target_picture("paraboloid", maps), rtol=2e-3, atol=1e-4)
+
+
+def test_prefilter_command_cube_cross_and_lobe(tmp_path):
+    table = tmp_path / "lobe.csv"
+    table.write_text("cos,p\n0.5,0\n0.9,0.5\n1.0,4\n")
+    out = tmp_path / "cube.exr"
+    argv = ["prefilter", "--env", SUNRISE, "--kernel", "lobe", "--lobe", str(table), "--param",
+            "cube", "--size", "4", "--source-height", "16", "-o", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    assert read_image(out).shape == (12, 16, 3)
+
+
+def assert_one_line_error(status, err, *fragments):
+    assert status == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragments"),
+    [
+        (["--exponent", "0"], ["--exponent 0", "(0, 100000]"]),
+        (["--exponent", "-3"], ["--exponent -3"]),
+        ([], ["--exponent N"]),
+        (["--exponent", "10", "--threshold", "0"], ["--threshold 0", "(0, 1)"]),
+        (["--exponent", "10", "--threshold", "1.5"], ["--threshold 1.5", "(0, 1)"]),
+        (["--exponent", "10", "--size", "8", "--border", "4"], ["--border 4", "size/2 = 4"]),
+        (["--exponent", "10", "--param", "cube", "--border", "2"], ["--border 2", "paraboloid"]),
+        (["--exponent", "10", "--size", "20000"], ["--size 20000", "1..16384"]),
+        (["--exponent", "10", "--param", "cube", "--size", "16384"], ["MiB", "free"]),
+        (["--exponent", "10", "--source-height", "100"], ["--source-height 100", "divisor"]),
+        (["--kernel", "lobe"], ["--lobe TABLE.csv"]),
+        (["--kernel", "diffuse", "--kd", "2"], ["--kd 2", "(0, 1]"]),
+    ],
+)
+def test_prefilter_bad_input(tmp_path, capsys, extra, fragments):
+    argv = ["prefilter", "--env", SUNRISE, *extra, "-o", str(tmp_path / "out.exr")]
+    status = main(argv)
+    assert_one_line_error(status, capsys.readouterr().err, *fragments)
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("rows", "fragments"),
+    [
+        ("1.0,2.0\n", ["at least 2 rows"]),
+        ("0.5,1\n0.2,2\n1.0,3\n", ["increase strictly"]),
+        ("0.5,1\n0.5,2\n", ["increase strictly"]),
+        ("0.5,-1\n1.0,2\n", ["finite, >= 0"]),
+        ("0.5,1\nabc,2\n", ["line 2"]),
+    ],
+)
+def test_prefilter_bad_lobe_table(tmp_path, capsys, rows, fragments):
+    table = tmp_path / "lobe.csv"
+    table.write_text(rows)
+    argv = ["prefilter", "--env", SUNRISE, "--kernel", "lobe", "--lobe", str(table),
+            "-o", str(tmp_path / "out.exr")]  # fmt: skip
+    assert_one_line_error(main(argv), capsys.readouterr().err, str(table), *fragments)
+    assert not (tmp_path / "out.exr").exists()
+
+
+def test_ctrl_c_leaves_no_file(tmp_path):
+    out = tmp_path / "slow.exr"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "envstudio", "prefilter", "--env", SUNRISE, "--exponent", "10",
+         "--algo", "brute", "--param", "cube", "--size", "256", "-o", str(out)],
+        stderr=subprocess.PIPE, env=env,
+    )  # fmt: skip
+    time.sleep(2.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert b"interrupted" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bench_prefilter_table_json_and_plot(tmp_path):
+    radiance = smooth_map(32, seed=5)
+    report = run_prefilter_bench(radiance, 16, [10, 500], sweep=(8, 16), repeats=2, threads=2)
+    rows = {row["exponent"]: row for row in report["rows"]}
+    assert set(rows) == {10.0, 500.0}
+    assert rows[500.0]["paper"]["speedup"] == 14.1
+    for row in rows.values():
+        assert row["max_difference_over_mean"] < 0.01
+        assert row["speedup"] == pytest.approx(row["brute_s"] / row["hierarchical_s"])
+        assert row["brute_s"] == min(row["brute_runs_s"]) and len(row["brute_runs_s"]) == 2
+    assert [p["face"] for p in report["sweep"]] == [8, 16]
+    assert all(isinstance(v, float) for v in report["sweep_slopes"].values())  # timing: no bound
+    json.dumps(report)
+    plot = write_scaling_plot(report, tmp_path / "scaling.png")
+    spec = oiio.ImageInput.open(str(plot)).spec()
+    assert spec.width > 100 and spec.height > 100
+
+
+def test_bench_prefilter_command(tmp_path, capsys):
+    status = main(["bench", "--prefilter", "--env", SUNRISE, "--size", "8x16", "--exponents", "10"])
+    assert status == 0
+    table = capsys.readouterr().out
+    assert "paraboloid 2x8x8" in table and "413" in table
+    status = main(["bench", "--prefilter", "--size", "100x200"])
+    assert status == 2
+
+
+def test_paraboloid_picture_layout():
+    """The paraboloid picture is front | back, upright: the front centre looks down +Z."""
+    maps = np.zeros((2, 4, 4, 3))
+    maps[0, 0, 0] = 1.0  # front face, row 0 (t = −1: bottom of the picture)
+    picture = target_picture("paraboloid", maps)
+    assert picture[3, 0, 0] == 1.0 and picture.shape == (4, 8, 3)
+
+
+# --- the mip chain for engines ---------------------------------------------------------------
+
+
+def test_gloss_exponents_follow_the_cmft_convention():
+    exponents = gloss_exponents(8, 10.0, 1.0)
+    assert exponents[0] == 2.0**11 and exponents[-1] == 2.0
+    assert np.allclose(np.diff(np.log2(exponents)), -10.0 / 7)
+
+
+def test_chain_level_zero_matches_the_brute_force():
+    image = smooth_map(32, seed=4)
+    chain = prefiltered_chain(image, 8, 4, 4.0, 1.0)
+    assert [level.faces.shape[1] for level in chain] == [8, 4, 2, 1]
+    assert chain[0].exponent == 32.0
+    brute = brute_force.prefilter(image, cubemap.texel_directions(8), kernels.phong(32.0))
+    assert relative_max_difference(chain[0].faces, brute) < 0.005
+
+
+def read_dds_cube(path: Path) -> list[np.ndarray]:
+    """A reader written from Microsoft's DDS layout (OpenImageIO 3.2 and Pillow 13 refuse
+    DXGI format 10): header fields, then per face every level's RGBA halves."""
+    data = path.read_bytes()
+    assert data[:4] == b"DDS "
+    size, _, height, width, _, _, mips = struct.unpack_from("<7I", data, 4)
+    assert size == 124 and height == width
+    assert data[84:88] == b"DX10"
+    caps, caps2 = struct.unpack_from("<2I", data, 108)
+    assert caps & 0x400000  # mip-mapped
+    assert caps2 & 0x200 and caps2 & 0xFC00 == 0xFC00  # cube map, all faces
+    dxgi, dimension, misc, array_size, _ = struct.unpack_from("<5I", data, 128)
+    assert (dxgi, dimension, misc, array_size) == (10, 3, 4, 1)
+    texels = np.frombuffer(data, dtype="<f2", offset=148).astype(np.float32)
+    levels = [np.empty((6, max(1, width >> k), max(1, width >> k), 4)) for k in range(mips)]
+    offset = 0
+    for face in range(6):
+        for level in levels:
+            count = level[face].size
+            level[face] = texels[offset : offset + count].reshape(level.shape[1:])
+            offset += count
+    assert offset == len(texels)
+    return levels
+
+
+def test_dds_round_trip(tmp_path):
+    rng = np.random.default_rng(9)
+    levels = [rng.uniform(0, 50, size=(6, 8 >> k, 8 >> k, 3)) for k in range(4)]
+    path = write_dds_cube(tmp_path / "cube.dds", levels)
+    back = read_dds_cube(path)
+    for wrote, read in zip(levels, back, strict=True):
+        assert np.allclose(read[..., :3], wrote, rtol=1e-3)
+        assert np.all(read[..., 3] == 1.0)
+
+
+def test_chain_command_writes_dds_exr_and_sh(tmp_path, capsys):
+    argv = ["prefilter", "--chain", "--env", SUNRISE, "--param", "cube", "--size", "8",
+            "--levels", "3", "--source-height", "32", "--check"]  # fmt: skip
+    assert main([*argv, "-o", str(tmp_path / "chain.dds")]) == 0
+    out = capsys.readouterr().out
+    assert "level 2: 2² N = 2" in out and "vs brute force" in out
+    levels = read_dds_cube(tmp_path / "chain.dds")
+    assert [level.shape[1] for level in levels] == [8, 4, 2]
+    sh = json.loads((tmp_path / "chain.sh.json").read_text())
+    assert np.shape(sh["coefficients"]) == (9, 3)
+    assert main([*argv, "-o", str(tmp_path / "chain.exr")]) == 0
+    assert read_image(tmp_path / "chain_mip1.exr").shape == (12, 16, 3)
+    assert np.allclose(cubemap.cross_to_faces(read_image(tmp_path / "chain_mip0.exr")),
+                       levels[0][..., :3], rtol=2e-3, atol=1e-4)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragments"),
+    [
+        (["--param", "paraboloid"], ["--chain", "--param cube"]),
+        (["--param", "cube", "--size", "8", "--levels", "5"], ["--levels 5", "1..4"]),
+        (["--param", "cube", "--size", "12"], ["--size 12", "power of two"]),
+        (["--param", "cube", "--gloss-scale", "0"], ["--gloss-scale 0"]),
+    ],
+)
+def test_chain_bad_input(tmp_path, capsys, extra, fragments):
+    argv = ["prefilter", "--chain", "--env", SUNRISE, *extra, "-o", str(tmp_path / "c.dds")]
+    assert_one_line_error(main(argv), capsys.readouterr().err, *fragments)
+    assert not list(tmp_path.iterdir())
