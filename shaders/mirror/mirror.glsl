@@ -10,25 +10,14 @@
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER
 #include "common/fresnel.glsl"
+#include "common/eq8.glsl"
 uniform samplerCube u_environment;
-uniform vec3 u_camera_position;
-uniform float u_fresnel;
-uniform float u_kd;
-uniform float u_diffuse_level;
-in vec3 v_world_position;
-in vec3 v_world_normal;
 out vec4 f_color;
 
 void main() {
-    vec3 n = normalize(v_world_normal);
-    vec3 v = normalize(u_camera_position - v_world_position);
-    if (dot(n, v) < 0.0) {
-        n = -n;  // back faces of open meshes (the teapot) reflect too
-    }
-    vec3 r = reflect(-v, n);
+    vec3 n, r;
+    reflection_frame(v_world_normal, v_world_position, u_camera_position, n, r);
     vec3 mirror = texture(u_environment, r).rgb;
-    vec3 diffuse = u_kd * textureLod(u_environment, n, u_diffuse_level).rgb;
-    float F = schlick_fresnel(u_fresnel, dot(r, n));
-    f_color = vec4(mix(diffuse, mirror, F), 1.0);
+    f_color = vec4(eq8_shade(u_environment, n, r, mirror, u_kd, u_diffuse_level, u_fresnel), 1.0);
 }
 #endif

@@ -5,7 +5,19 @@ from __future__ import annotations
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs
-from envstudio.methods.parameters import Parameter
+from envstudio.methods.parameters import Parameter, ParameterValues
+
+
+def set_eq8_uniforms(program, frame: FrameInputs, values: ParameterValues) -> None:
+    """The uniforms of common/eq8.glsl's shading: camera, f_λ, k_d, the diffuse mip level.
+
+    For every method that declares mirror's ``fresnel`` and ``kd``; the diffuse
+    term reads the cube map's 2 × 2-per-face level along the normal.
+    """
+    set_uniform(program, "u_camera_position", frame.camera_position)
+    set_uniform(program, "u_fresnel", float(values["fresnel"]))
+    set_uniform(program, "u_kd", float(values["kd"]))
+    set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
 
 
 @register
@@ -44,10 +56,7 @@ class MirrorMethod(Method):
         program = self.programs.get("mirror/mirror.glsl")
         environment.cube.use(location=0)
         set_uniform(program, "u_environment", 0)
-        set_uniform(program, "u_camera_position", frame.camera_position)
-        set_uniform(program, "u_fresnel", self.values["fresnel"])
-        set_uniform(program, "u_kd", self.values["kd"])
-        set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
+        set_eq8_uniforms(program, frame, self.values)
         with frame.timer.measure("mirror"):
             for gpu_node in frame.scene.reflectors():
                 set_uniform(program, "u_view", frame.view)

@@ -1,0 +1,245 @@
+"""Method ``hwconv``: hardware-accelerated Phong prefiltering of seed 004 §5.2.
+
+Every refilter (once per change of the environment or of a filter parameter, or
+every frame with ``refilter_every_frame``, as in the paper's timing table):
+
+1. the static environment (GpuScene.static_environment: the local objects over the
+   far field, seen from the reflector) is resampled into a dual paraboloid with a
+   border and its mip chain (only when that environment, ``map_size`` or ``border``
+   changes);
+2. radii.plan_filters gives r_s, r_l and the shrink factors from N, ε and the
+   maximum kernel size;
+3. convolution.ParaboloidConvolution convolves both faces with the Phong lobe
+   sampled in paraboloid space at the centre (map S) and at the rim (map L), each
+   at its shrunk mip level, and blends them with weight d² (skipped in ``one_pass``);
+
+then the reflector reads the result along the reflection vector and combines it
+with a diffuse term by seed 000 eq. 8 (shaders/hwconv/hwconv.glsl). N and ε only
+change the kernel weights, uniforms of one compiled program: no recompile.
+``view`` shows S, L, the blended map or the source as the frame instead.
+"""
+
+from __future__ import annotations
+
+import moderngl
+
+from envstudio.errors import ParameterError
+from envstudio.gpu.fullscreen import FullscreenPass
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.base import Method, register
+from envstudio.methods.context import FrameInputs
+from envstudio.methods.hwconv.convolution import FaceMaps, ParaboloidConvolution
+from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, plan_filters
+from envstudio.methods.mirror import MirrorMethod
+from envstudio.methods.parameters import Parameter
+
+#: Choices of ``view``: the reflector, or one of the maps as the frame.
+VIEWS = ("reflector", "blended", "small", "large", "exact")
+#: Choices of ``kernel``: the paper's two shift-invariant maps, or the exact shift-variant one.
+KERNELS = ("two_maps", "exact")
+
+
+@register
+class HwConvMethod(Method):
+    """Two-pass hardware Phong convolution of a dual-paraboloid map (seed 004 §5.2)."""
+
+    name = "hwconv"
+    title = "Kautz et al. 2000 (hardware Phong prefilter, dual paraboloid)"
+    summary = (
+        "Dual-paraboloid map convolved on the GPU with the Phong lobe at the centre (S) "
+        "and rim (L) radii, shrunk through the mip chain, blended by d²; Schlick Fresnel."
+    )
+    parameters = (
+        Parameter(
+            "phong_exponent",
+            "float",
+            100.0,
+            1.0,
+            10000.0,
+            "N",
+            "Phong exponent of the lobe ⟨r, l⟩^N the map is convolved with.",
+            log=True,
+        ),
+        Parameter(
+            "epsilon",
+            "float",
+            0.1,
+            0.001,
+            0.99,
+            "ε",
+            "Lobe values below ε are clamped to zero, which bounds the kernel (paper: 0.1).",
+            log=True,
+        ),
+        Parameter(
+            "max_kernel",
+            "int",
+            7,
+            1,
+            MAX_KERNEL,
+            "texels",
+            "Largest filter size; larger kernels shrink map and filter by 2 (paper: 7, SGI O2).",
+        ),
+        Parameter(
+            "map_size",
+            "int",
+            128,
+            8,
+            65536,
+            "texels",
+            "Texels across each paraboloid face's unit disc (paper: 512).",
+        ),
+        Parameter(
+            "border",
+            "int",
+            36,
+            0,
+            65536,
+            "texels",
+            "Border outside the disc on each side of a face; must hold the largest kernel's "
+            "radius (paper: 64).",
+        ),
+        Parameter(
+            "kernel",
+            "choice",
+            "two_maps",
+            choices=KERNELS,
+            help="two_maps: S and L blended by d² (the paper); exact: the Phong lobe per texel "
+            "with the paraboloid's solid angle, a shift-variant kernel (past the paper).",
+        ),
+        Parameter(
+            "one_pass",
+            "bool",
+            False,
+            help="Only the small kernel (map S), the paper's 1-pass column.",
+        ),
+        Parameter(
+            "refilter_every_frame",
+            "bool",
+            False,
+            help="Convolve again every frame even when nothing changed (the paper's timings).",
+        ),
+        Parameter(
+            "view",
+            "choice",
+            "reflector",
+            choices=VIEWS,
+            help="Show the reflector, or the blended map, S, L or the exact map as the frame "
+            "(front | back).",
+        ),
+        *MirrorMethod.parameters,  # fresnel f_λ and k_d: the same eq. 8 as mirror's
+    )
+
+    def __init__(self, ctx: moderngl.Context, programs):
+        super().__init__(ctx, programs)
+        self.convolution = ParaboloidConvolution(ctx, programs)
+        self._quad = FullscreenPass(ctx)
+        self._source_key: tuple | None = None
+        self._filter_key: tuple | None = None
+        self._result: FaceMaps | None = None
+        #: Convolutions run so far (tests and the bench count refilters).
+        self.refilters = 0
+
+    def plan(self) -> FilterPlan:
+        """The kernels of the current values; raises ParameterError for a bad combination.
+
+        Checks the faces against the context's GL_MAX_TEXTURE_SIZE and the border
+        against the largest kernel's radius (radii.FilterPlan.check_border).
+        """
+        values = self.values
+        size, border = int(values["map_size"]), int(values["border"])
+        limit = int(self.ctx.info["GL_MAX_TEXTURE_SIZE"])
+        if size + 2 * border > limit:
+            raise ParameterError(
+                f"map_size={size}: expected an integer in [8, {max(limit - 2 * border, 8)}] "
+                f"(faces of map_size + 2·border={size + 2 * border} texels exceed "
+                f"GL_MAX_TEXTURE_SIZE={limit})"
+            )
+        plan = plan_filters(
+            float(values["phong_exponent"]),
+            float(values["epsilon"]),
+            size,
+            border,
+            int(values["max_kernel"]),
+        )
+        maps = self._maps()
+        plan.check_border(one_pass="large" not in maps, exact="exact" in maps)
+        return plan
+
+    def _maps(self) -> set[str]:
+        """The maps the current kernel, pass count and view need."""
+        if self.values["kernel"] == "exact":
+            maps = {"exact"}
+        else:
+            maps = {"small"} if self.values["one_pass"] else {"blended"}
+        if self.values["view"] != "reflector":
+            maps.add(self.values["view"])
+        if "blended" in maps:
+            maps |= {"small", "large"}
+        return maps
+
+    def _result_name(self) -> str:
+        if self.values["kernel"] == "exact":
+            return "exact"
+        return "small" if self.values["one_pass"] else "blended"
+
+    def render(self, frame: FrameInputs) -> None:
+        plan = self.plan()
+        view = self.values["view"]
+        maps = self._maps()
+        static = frame.scene.static_environment(frame.timer)
+        source_key = (id(frame.scene), static.revision, plan.size, plan.border)
+        if source_key != self._source_key:
+            with frame.timer.measure("hwconv.source"):
+                self.convolution.set_source(static.cube, plan.size, plan.border)
+            self._source_key, self._filter_key = source_key, None
+        filter_key = (source_key, plan, tuple(sorted(maps)))
+        if filter_key != self._filter_key or self.values["refilter_every_frame"]:
+            self.convolution.filter(plan, maps, frame.timer)
+            self._filter_key = filter_key
+            self.refilters += 1
+        self._result = self.convolution.maps[self._result_name()]
+        frame.target.use()
+        if view == "reflector":
+            self._draw_reflectors(frame, plan, static.cube)
+        else:
+            self._draw_map(frame, self.convolution.maps[view])
+
+    def _draw_reflectors(self, frame: FrameInputs, plan: FilterPlan, cube) -> None:
+        """Steps 13–14: the reflectors with the prefiltered map, eq. 8 of seed 000."""
+        program = self.programs.get("hwconv/hwconv.glsl")
+        self._result.use(front=0, back=1)
+        cube.use(location=2)
+        set_uniform(program, "u_front", 0)
+        set_uniform(program, "u_back", 1)
+        set_uniform(program, "u_environment", 2)
+        set_uniform(program, "u_size", float(plan.face_size))
+        set_uniform(program, "u_border", float(plan.border))
+        set_uniform(program, "u_camera_position", frame.camera_position)
+        set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
+        set_uniform(program, "u_kd", float(self.values["kd"]))
+        set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
+        set_uniform(program, "u_view", frame.view)
+        set_uniform(program, "u_projection", frame.projection)
+        with frame.timer.measure("hwconv"):
+            for gpu_node in frame.scene.reflectors():
+                set_uniform(program, "u_model", gpu_node.model)
+                set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                gpu_node.mesh.render(program)
+
+    def _draw_map(self, frame: FrameInputs, maps: FaceMaps) -> None:
+        """One map as the frame: front face left, back face right (shaders/hwconv/view.glsl)."""
+        program = self.programs.get("hwconv/view.glsl")
+        maps.use(front=0, back=1)
+        set_uniform(program, "u_front", 0)
+        set_uniform(program, "u_back", 1)
+        with frame.timer.measure("hwconv"):
+            self.ctx.disable(moderngl.DEPTH_TEST)
+            self._quad.draw(program)
+            self.ctx.enable(moderngl.DEPTH_TEST)
+
+    def release(self) -> None:
+        """Free the maps and vertex arrays; safe to call twice."""
+        self.convolution.release()
+        self._quad.release()
+        self._result = None
+        self._source_key = self._filter_key = None
