@@ -11,6 +11,10 @@
 // reparameterised (prefiltered) map does, not clipped by the surface.
 // Model 1 (microfacet): k_d/pi (1 - F(n.v)) + GGX D G2 F(v.h) / (4 n.l n.v),
 //   alpha = sqrt(2 / (4N + 2)) (a Phong exponent N is about a Blinn exponent 4N).
+// Model 2 (banks, seed 004 section 5.3): L_o = (1 - F) k_d D + F B with Schlick F(n.v),
+//   B = c int f_banks(v, l; t) L(l) [max(n.l, 0)] dl, the bracket only with
+//   u_self_shadowing (without it the whole sphere, as method `banks`' 3D map);
+//   c = 1 / int f_banks dl with u_banks_normalize (method banks' `normalize`), else 1.
 //
 // A batch may be drawn in chunks (u_chunk_first, u_chunk_samples): llvmpipe
 // ends an invocation's loops after 65 535 iterations in all, so there a pixel
@@ -19,7 +23,15 @@
 // estimates (rgb) and their count (a); merge_batch.glsl turns the batch into
 // its mean and adds it, and its square, to the accumulation.
 #if defined VERTEX_SHADER
-#include "common/mesh_vs.glsl"
+#include "common/mesh_world.glsl"
+#include "common/mesh_tangent.glsl"
+uniform mat4 u_view;
+uniform mat4 u_projection;
+
+void main() {
+    gl_Position = u_projection * u_view * mesh_world();
+    mesh_tangent();
+}
 #elif defined FRAGMENT_SHADER
 #include "common/random.glsl"
 #include "common/sobol.glsl"
@@ -27,6 +39,7 @@
 #include "reference/sampling.glsl"
 #include "reference/material.glsl"
 #include "reference/radiance.glsl"
+#include "banks/brdf.glsl"
 
 uniform vec3 u_camera_position;
 uniform int u_samples;
@@ -70,6 +83,7 @@ void draw_joint(uvec2 pixel, uint i) {
 
 in vec3 v_world_position;
 in vec3 v_world_normal;
+in vec3 v_world_tangent;
 layout(location = 0) out vec4 f_batch;
 
 float balance(float a, float b) { return a / max(a + b, 1e-30); }
@@ -77,12 +91,9 @@ float balance(float a, float b) { return a / max(a + b, 1e-30); }
 // One MIS sample pair for D (cosine lobe) and P (Phong lobe): four directions
 // with their weights, then one loop that traces them (a single call site of
 // incident(), so the traversal is compiled once).
-vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
-    float N = u_phong_exponent;
-    float F = schlick_fresnel(u_fresnel, dot(n, v));
-    float diffuse_weight = (1.0 - F) * u_kd;
-    vec3 directions[4];
-    float weights[4];
+// The MIS pair for D (seed 000 eq. 3-4) of models 0 and 2: directions[0..1], weights[0..1].
+void sample_diffuse(vec3 n, uvec2 pixel, uint index, float diffuse_weight,
+                    inout vec3 directions[4], inout float weights[4]) {
     // cosine-lobe sample for D (pdf = f)
     directions[0] = sample_cosine(n, sample2(pixel, 0u, index));
     float pdf = max(dot(n, directions[0]), 0.0) / PI;
@@ -92,6 +103,17 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     pdf = env_pdf(directions[1]);
     float f = max(dot(n, directions[1]), 0.0) / PI;
     weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
+}
+
+vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
+    float N = u_phong_exponent;
+    float F = schlick_fresnel(u_fresnel, dot(n, v));
+    float diffuse_weight = (1.0 - F) * u_kd;
+    vec3 directions[4];
+    float weights[4];
+    sample_diffuse(n, pixel, index, diffuse_weight, directions, weights);
+    float pdf;
+    float f;
     // Phong-lobe sample for P (pdf = lobe; its weight below)
     directions[2] = sample_phong(r, N, g_lobe);
     // environment sample for P: from the part of the map inside the lobe's cap
@@ -157,6 +179,58 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     return result;
 }
 
+uniform bool u_banks_normalize;
+uniform bool u_self_shadowing;
+
+// Density in solid angle of the Banks lobe's sampling: theta = angle(l, t) uniform
+// over the lobe's band [theta0, theta1], phi uniform about t.
+float banks_band_pdf(vec3 t, vec3 l, float theta0, float theta1) {
+    float c = clamp(dot(l, t), -1.0, 1.0);
+    float theta = acos(c);
+    if (theta < theta0 || theta > theta1) return 0.0;
+    return 1.0 / (2.0 * PI * max(sqrt(1.0 - c * c), 1e-7) * max(theta1 - theta0, 1e-7));
+}
+
+// One MIS sample pair for D (cosine lobe) and B (Banks lobe about the tangent t):
+// the Banks lobe's band sample (banks_band_pdf) and an environment sample (the
+// whole map), by the balance heuristic. Without self-shadowing the Banks
+// directions see the environment from any side of the surface (method banks'
+// map: "an object using this environment map does reflect light from behind it").
+vec3 sample_banks(vec3 p, vec3 n, vec3 t, vec3 v, uvec2 pixel, uint index) {
+    float F = schlick_fresnel(u_fresnel, dot(n, v));
+    vec3 directions[4];
+    float weights[4];
+    sample_diffuse(n, pixel, index, (1.0 - F) * u_kd, directions, weights);
+    float b = dot(v, t);
+    float theta0, theta1, psi;
+    banks_band(b, theta0, theta1, psi);
+    float scale = F / (u_banks_normalize ? banks_integral(b) : 1.0);
+    vec3 e1 = normalize(abs(t.x) < 0.9 ? cross(t, vec3(1.0, 0.0, 0.0)) : cross(t, vec3(0.0, 1.0, 0.0)));
+    vec3 e2 = cross(t, e1);
+    float theta = mix(theta0, theta1, g_lobe.x);
+    float phi = 2.0 * PI * g_lobe.y;
+    directions[2] = cos(theta) * t + sin(theta) * (cos(phi) * e1 + sin(phi) * e2);
+    directions[3] = sample_environment(g_environment);
+    for (int k = 2; k < 4; ++k) {
+        vec3 l = directions[k];
+        float shadow = u_self_shadowing ? max(dot(n, l), 0.0) : 1.0;
+        float f = banks_lobe(dot(l, t), b) * shadow;
+        float lobe_pdf = banks_band_pdf(t, l, theta0, theta1);
+        float env = env_pdf(l);
+        float pdf = k == 2 ? lobe_pdf : env;
+        weights[k] = f > 0.0 && pdf > 0.0
+                     ? scale * f / pdf * balance(pdf, k == 2 ? env : lobe_pdf) : 0.0;
+    }
+    vec3 total = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        if (weights[k] <= 0.0) continue;
+        vec3 l = directions[k];
+        bool unshadowed = k >= 2 && !u_self_shadowing;
+        total += weights[k] * (unshadowed ? environment_radiance(l) : incident(p, n, l));
+    }
+    return total;
+}
+
 uniform bool u_pixel_filter;
 // Adaptive sampling (methods/reference.py): per pixel, (samples-per-frame units
 // drawn before the allocation was set, multiplier m) and the batches since.
@@ -215,8 +289,13 @@ void main() {
         g_path_sample = g_first_sample + uint(i);
         g_path_stream = 0u;
         vec3 r = reflect(-v, n);
-        batch += u_brdf_model == 0 ? sample_eq8(p, n, v, r, pixel, uint(i))
-                                   : sample_microfacet(p, n, v, pixel, uint(i));
+        if (u_brdf_model == 0) {
+            batch += sample_eq8(p, n, v, r, pixel, uint(i));
+        } else if (u_brdf_model == 1) {
+            batch += sample_microfacet(p, n, v, pixel, uint(i));
+        } else {
+            batch += sample_banks(p, n, banks_tangent(v_world_tangent, n), v, pixel, uint(i));
+        }
     }
     // count the footprint points on the reflectors only: the mean over the covered footprint
     f_batch = vec4(batch, float(taken));

@@ -2,7 +2,9 @@
 // uniforms and one-sample BRDF sampling, used wherever a path continues at a
 // reflector (paths.glsl). Needs common/fresnel.glsl and reference/sampling.glsl.
 //   model 0 (seed 000 eq. 8): (1 - F) k_d / pi (n.l) + F (N+1)/2pi (r.l)^N, F = Schlick(n.v);
-//   model 1 (microfacet): k_d / pi (1 - F(n.v)) (n.l) + GGX D G2 F(v.h) / (4 n.v).
+//   model 1 (microfacet): k_d / pi (1 - F(n.v)) (n.l) + GGX D G2 F(v.h) / (4 n.v);
+//   model 2 (banks): a traced path that meets a reflector again ends there (black):
+//   the tracer does not carry the tangent field; compare banks with trace=false.
 uniform int u_brdf_model;
 uniform float u_kd;
 uniform float u_fresnel;
@@ -25,6 +27,10 @@ vec3 sample_reflector(vec3 direction, vec3 n, vec3 xi, out float weight) {
     float n_dot_v = max(dot(n, v), 1e-4);
     float F = schlick_fresnel(u_fresnel, n_dot_v);
     float diffuse = (1.0 - F) * u_kd;
+    if (u_brdf_model == 2) {
+        weight = 0.0;
+        return n;
+    }
     if (u_brdf_model == 0) {
         float specular = F;
         weight = diffuse + specular;

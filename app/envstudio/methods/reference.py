@@ -49,6 +49,8 @@ import numpy.typing as npt
 from envstudio.core.env_sampling import LUMINANCE, EnvironmentDistribution
 from envstudio.gpu.context import is_software_renderer, require_version
 from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.banks.method import MATERIAL_PARAMETERS as BANKS_PARAMETERS
+from envstudio.methods.banks.tangent_buffers import TangentBuffers
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, GpuScene
 from envstudio.methods.parameters import Parameter
@@ -58,8 +60,9 @@ from envstudio.methods.sample_allocation import (
     SampleAllocation,
 )
 from envstudio.methods.tracing import TraceData
+from envstudio.scene.tangents import TangentField
 
-MODELS = ("phong", "microfacet")
+MODELS = ("phong", "microfacet", "banks")
 SEQUENCES = ("random", "sobol")
 ENVIRONMENT_SAMPLING = ("auto", "global", "lobe")
 #: The projection fits the checks whose samples are within this factor of the last.
@@ -190,7 +193,16 @@ class ReferenceMethod(Method):
             "phong",
             choices=MODELS,
             rebuild=False,
-            help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX.",
+            help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX; banks: "
+            "seed 004 §5.3's Banks lobe about the tangent field (diffuse + Banks, Schlick).",
+        ),
+        *BANKS_PARAMETERS,
+        Parameter(
+            "self_shadowing",
+            "bool",
+            False,
+            help="model=banks: keep the term ⟨n,l⟩ (and the hemisphere) that method banks "
+            "drops (seed 004 §5.3); off: the whole sphere, as the 3D map.",
         ),
         Parameter(
             "fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."
@@ -315,6 +327,7 @@ class ReferenceMethod(Method):
         self._pixel_cost_s: float | None = None
         self._allocation: moderngl.Texture | None = None  # (units, m) per pixel, for the shader
         self._sample_allocation = SampleAllocation.plain((1, 1))
+        self._tangent_buffers = TangentBuffers(ctx)
 
     def finished(self) -> bool:
         """Converged, the sample budget spent, or the time limit reached."""
@@ -540,8 +553,10 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_viewport", np.asarray(frame.size, np.float32))
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
-        for name in ("kd", "fresnel", "phong_exponent"):
+        for name in ("kd", "fresnel", "phong_exponent", "sharpness"):
             set_uniform(program, f"u_{name}", float(self.values[name]))
+        set_uniform(program, "u_banks_normalize", bool(self.values["normalize"]))
+        set_uniform(program, "u_self_shadowing", bool(self.values["self_shadowing"]))
         set_uniform(program, "u_samples", int(self.values["samples"]))
         set_uniform(program, "u_sequence", SEQUENCES.index(self.values["sequence"]))
         set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
@@ -609,10 +624,18 @@ class ReferenceMethod(Method):
     def _draw_reflectors(self, program: moderngl.Program, frame: FrameInputs) -> None:
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
-        for gpu_node in frame.scene.reflectors():
+        banks = self.values["model"] == "banks"
+        field = TangentField(str(self.values["tangent_field"]), str(self.values["tangent_axis"]))
+        reflectors = frame.scene.reflectors()
+        if banks:
+            self._tangent_buffers.forget_unused(reflectors)
+        for gpu_node in reflectors:
             set_uniform(program, "u_model", gpu_node.model)
             set_uniform(program, "u_normal_matrix", gpu_node.normal)
-            gpu_node.mesh.render(program)
+            if banks:  # the tangents of the banks material (methods/banks/tangent_buffers.py)
+                self._tangent_buffers.render(program, gpu_node, field)
+            else:
+                gpu_node.mesh.render(program)
 
     # -- results -----------------------------------------------------------------------------
 
@@ -789,8 +812,9 @@ class ReferenceMethod(Method):
         self._sum = self._sum_sq = self._batch = self._allocation = None
 
     def release(self) -> None:
-        """Free targets and sampling tables; safe to call twice."""
+        """Free targets, sampling tables and tangent buffers; safe to call twice."""
         self._release_targets()
+        self._tangent_buffers.release()
         if self._tables is not None:
             self._tables.release()
             self._tables = None

@@ -19,7 +19,7 @@ from envstudio.render.frame import FrameRenderer, FrameStats
 from envstudio.scene.graph import Scene
 
 
-def material_values(scene: Scene) -> dict[str, float]:
+def material_values(scene: Scene) -> dict[str, float | str]:
     """Method parameter values implied by the first reflector's material."""
     reflectors = scene.reflectors()
     if not reflectors:
@@ -29,6 +29,9 @@ def material_values(scene: Scene) -> dict[str, float]:
         "kd": float(np.mean(material.kd)),
         "fresnel": material.fresnel,
         "phong_exponent": material.phong_exponent,
+        "sharpness": material.sharpness,
+        "tangent_field": material.tangent_field.kind,
+        "tangent_axis": material.tangent_field.axis,
     }
 
 

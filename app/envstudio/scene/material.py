@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from envstudio.scene.tangents import TangentField
+
 
 @dataclass
 class Material:
@@ -17,9 +19,15 @@ class Material:
         f_λ, Schlick reflectance at normal incidence in [0, 1] (seed 000 section 5.2).
     phong_exponent : float
         Phong lobe exponent N (seed 000 eq. 5–7).
+    sharpness : float
+        s ∈ [0, 1) of the Banks BRDF (seed 004 §5.3), for anisotropic methods.
+    tangent_field : TangentField
+        Where the anisotropic methods' tangents come from (scene/tangents.py).
     """
 
     kd: tuple[float, float, float] = (0.0, 0.0, 0.0)
     fresnel: float = 1.0
     phong_exponent: float = 200.0
+    sharpness: float = 0.9
+    tangent_field: TangentField = field(default_factory=TangentField)
     extra: dict[str, float] = field(default_factory=dict)

@@ -22,12 +22,16 @@ class MeshData:
         Counter-clockwise triangles.
     name : str
         Where the mesh came from (file name or primitive), for messages.
+    uvs : (n, 2) float32 or None
+        Texture coordinates per vertex, if the mesh has them (the ``uv`` tangent
+        field of scene/tangents.py follows their u direction).
     """
 
     positions: npt.NDArray[np.float32]
     normals: npt.NDArray[np.float32]
     indices: npt.NDArray[np.uint32]
     name: str = "mesh"
+    uvs: npt.NDArray[np.float32] | None = None
 
     def __post_init__(self):
         self.positions = np.ascontiguousarray(self.positions, dtype=np.float32).reshape(-1, 3)
@@ -35,6 +39,10 @@ class MeshData:
         self.indices = np.ascontiguousarray(self.indices, dtype=np.uint32).reshape(-1, 3)
         if len(self.normals) != len(self.positions):
             raise ValueError(f"{self.name}: {len(self.normals)} normals for {len(self.positions)}")
+        if self.uvs is not None:
+            self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32).reshape(-1, 2)
+            if len(self.uvs) != len(self.positions):
+                raise ValueError(f"{self.name}: {len(self.uvs)} uvs for {len(self.positions)}")
 
     @property
     def triangle_count(self) -> int:
@@ -63,4 +71,6 @@ class MeshData:
         centre = (lo + hi) / 2
         extent = np.linalg.norm(self.positions - centre, axis=1).max()
         scale = radius / extent if extent > 0 else 1.0
-        return MeshData((self.positions - centre) * scale, self.normals, self.indices, self.name)
+        return MeshData(
+            (self.positions - centre) * scale, self.normals, self.indices, self.name, self.uvs
+        )

@@ -18,7 +18,8 @@ def uv_sphere(radius: float = 1.0, rings: int = 48, segments: int = 96) -> MeshD
     a = (r * (segments + 1) + s).ravel()
     b, c, d = a + segments + 1, a + 1, a + segments + 2
     tris = np.concatenate([np.stack([a, b, c], 1), np.stack([c, b, d], 1)])
-    return MeshData(normals * radius, normals, tris, f"sphere(r={radius})")
+    uvs = np.stack([p / (2.0 * np.pi), 1.0 - t / np.pi], axis=-1).reshape(-1, 2)
+    return MeshData(normals * radius, normals, tris, f"sphere(r={radius})", uvs)
 
 
 def box(size: float = 1.0, inward: bool = False) -> MeshData:

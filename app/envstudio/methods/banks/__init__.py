@@ -1,0 +1,1 @@
+"""Method ``banks``: anisotropic prefiltered environment maps, Banks model (seed 004 §5.3)."""
