@@ -1,0 +1,1 @@
+"""Offline work, GL-free where it can be: bake.rsibr (seed 002's radiance sphere maps)."""
