@@ -99,7 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="comma-separated method names (default: all but the progressive reference, "
         "whose frame is one batch; see --converge)",
     )
-    bench.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT (default 1280x720)")
+    bench.add_argument(
+        "--size",
+        help="WIDTHxHEIGHT (default 1280x720); with --prefilter the paraboloid map, "
+        "FACExWIDTH (default 128x256, two 128-texel faces)",
+    )
     bench.add_argument("--frames", type=int, default=60, help="measured frames per method")
     bench.add_argument("--warmup", type=int, default=5, help="unmeasured frames per method")
     bench.add_argument(
@@ -125,8 +129,41 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --converge: continue the saved accumulation of an earlier run of the same "
         "inputs and save this one every minute (seconds then count all the runs)",
     )
+    bench.add_argument(
+        "--prefilter",
+        action="store_true",
+        help="seed 004 §5.1's table instead: brute-force vs hierarchical Phong prefilter "
+        "(CPU), and with --json the time-against-size plot as PNG beside it",
+    )
+    bench.add_argument(
+        "--exponents",
+        default="10,50,100,250,500",
+        help="with --prefilter, --hwconv-table or --hwconv-accuracy: comma-separated Phong "
+        "exponents "
+        "(default 10,50,100,250,500)",
+    )
+    bench.add_argument(
+        "--hwconv-table",
+        action="store_true",
+        help="seed 004 §5.2's table for --methods hwconv: filter sizes and shrink factors "
+        "beside the paper's, refilter + render per frame (2-pass, 1-pass) over the static map",
+    )
+    bench.add_argument(
+        "--hwconv-accuracy",
+        action="store_true",
+        help="for --methods hwconv: RMS and max relative error of 2-pass, 1-pass and exact "
+        "against the brute-force Phong prefilter at --exponents (map_size 512 unless --param)",
+    )
+    bench.add_argument(
+        "--directions",
+        type=int,
+        default=8192,
+        help="with --hwconv-accuracy: lookup directions over the sphere (default 8192)",
+    )
     _add_param_option(bench)
     bench.add_argument("--json", dest="json_out", help="write the report as JSON here")
+
+    _add_prefilter_parser(sub)
 
     compare = sub.add_parser(
         "compare", help="measure methods against the converged reference (PSNR, SSIM, FLIP)"
@@ -199,12 +236,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sh.add_argument("--json", action="store_true", help="machine-readable output")
 
+    _add_bake_parser(sub)
+
     figure = sub.add_parser("figure", help="render a figure of a seed paper")
     figure.add_argument(
         "name",
-        choices=("kautz-grid", "kautz-seams"),
+        choices=("kautz-grid", "kautz-seams", "hwconv-distortion", "banks-slices"),
         help="kautz-grid: seed 000 Figure 6 (b x f_lambda); kautz-seams: Figure 4, "
-        "box vs cross-face mip chain at b = 9.4, with the seam measurement",
+        "box vs cross-face mip chain at b = 9.4, with the seam measurement; "
+        "hwconv-distortion: seed 004 Figure 3, a paraboloid kernel's distortion on the "
+        "sphere (no GL; the scene options are ignored)",
     )
     _add_scene_options(figure)
     _add_param_option(figure)
@@ -212,6 +253,77 @@ def build_parser() -> argparse.ArgumentParser:
     figure.add_argument("--size", default="192x192", help="one panel, WIDTHxHEIGHT")
     figure.add_argument("-o", "--output", required=True, help="OUT.png")
     return parser
+
+
+def _add_bake_parser(sub) -> None:
+    bake = sub.add_parser("bake", help="offline bakes: rsibr radiance sphere maps (seed 002)")
+    bake.add_argument("kind", choices=("rsibr",), help="what to bake")
+    bake.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    bake.add_argument("--brdf", default="phong", help="phong, lambertian or carpaint")
+    _add_param_option(bake)
+    bake.add_argument("--size", type=int, default=64, help="map edge in texels (default 64)")
+    bake.add_argument("--views", type=int, default=12, help="12 (icosahedron) or 42 views")
+    bake.add_argument(
+        "--samples", type=int, default=256, help="GPU importance samples per lobe (default 256)"
+    )
+    bake.add_argument(
+        "--device", choices=("auto", "gpu", "cpu"), default="auto", help="auto: GPU, else CPU"
+    )
+    bake.add_argument("-o", "--output", required=True, help="FILE.rsibr")
+
+
+def _add_prefilter_parser(sub) -> None:
+    prefilter = sub.add_parser(
+        "prefilter", help="prefilter an environment on the CPU (seed 004 §4, §5.1) to EXR"
+    )
+    prefilter.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    prefilter.add_argument(
+        "--kernel",
+        choices=("diffuse", "phong", "lobe"),
+        default="phong",
+        help="diffuse k_d/π<n,l>, normalised Phong (N+1)/2π<r,l>^N, or a tabulated lobe p(<r,l>)",
+    )
+    prefilter.add_argument("--exponent", type=float, help="Phong exponent N > 0 (phong only)")
+    prefilter.add_argument("--lobe", help="lobe table: CSV of (cosine, value) rows (lobe only)")
+    prefilter.add_argument("--kd", type=float, default=1.0, help="diffuse albedo k_d (diffuse)")
+    prefilter.add_argument(
+        "--algo", choices=("brute", "hierarchical"), default="hierarchical", help="method"
+    )
+    prefilter.add_argument(
+        "--param",
+        choices=("paraboloid", "cube", "latlong"),
+        default="paraboloid",
+        help="target (paraboloid: front | back; cube: horizontal cross; latlong: S x 2S)",
+    )
+    prefilter.add_argument("--size", type=int, default=128, help="face edge (lat-long: height)")
+    prefilter.add_argument("--border", type=int, default=0, help="paraboloid border in texels")
+    prefilter.add_argument(
+        "--threshold",
+        type=float,
+        default=0.001,
+        help="hierarchical: largest filter spread accepted over a node, in (0, 1) "
+        "(seed 004: 0.001)",
+    )
+    prefilter.add_argument(
+        "--source-height", type=int, help="box-filter the source to this many rows first"
+    )
+    prefilter.add_argument("--threads", type=int, help="worker threads (default: every core)")
+    prefilter.add_argument(
+        "--chain",
+        action="store_true",
+        help="a Phong cube mip chain for engines, N = 2^(scale*g + bias) per level "
+        "(-o OUT.dds: DX10 RGBA16F cube with mips; OUT.exr: a cross per level), "
+        "plus OUT.sh.json (9 SH coefficients)",
+    )
+    prefilter.add_argument("--levels", type=int, default=8, help="--chain: mip levels")
+    prefilter.add_argument("--gloss-scale", type=float, default=10.0, help="--chain: scale")
+    prefilter.add_argument("--gloss-bias", type=float, default=1.0, help="--chain: bias")
+    prefilter.add_argument(
+        "--check",
+        action="store_true",
+        help="--chain: every level against the brute force at its exponent (sampled texels)",
+    )
+    prefilter.add_argument("-o", "--output", required=True, help="OUT.exr (--chain: or OUT.dds)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

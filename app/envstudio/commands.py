@@ -185,7 +185,13 @@ def run_bench(args: argparse.Namespace) -> int:
     from envstudio.render.bench import format_report
     from envstudio.render.bench import run_bench as bench
 
-    size = parse_size(args.size)
+    if args.prefilter:
+        from envstudio.render.prefilter_command import run_prefilter_bench
+
+        return run_prefilter_bench(args)
+    size = parse_size(args.size or "1280x720")
+    if args.hwconv_table or args.hwconv_accuracy:
+        return _run_hwconv_table(args, size)
     if args.converge:
         return _run_convergence(args, size)
     if args.resume:
@@ -218,6 +224,44 @@ def run_bench(args: argparse.Namespace) -> int:
     finally:
         session.release()
     print(format_report(report))
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+    return 0
+
+
+def _run_hwconv_table(args: argparse.Namespace, size: tuple[int, int]) -> int:
+    """``envstudio bench --methods hwconv --hwconv-table``: seed 004 §5.2's table;
+    ``--hwconv-accuracy``: its error against the brute-force Phong prefilter."""
+    from envstudio.render.hwconv_accuracy import format_accuracy, run_accuracy
+    from envstudio.render.hwconv_bench import format_table, run_table
+
+    flag = "--hwconv-accuracy" if args.hwconv_accuracy else "--hwconv-table"
+    if args.hwconv_table and args.hwconv_accuracy:
+        raise ParameterError("--hwconv-table --hwconv-accuracy: expected one of them")
+    if args.methods not in (None, "hwconv"):
+        raise ParameterError(f"{flag} --methods {args.methods}: only 'hwconv' has it")
+    if args.frames < 1 or args.warmup < 0:
+        raise ParameterError("--frames must be >= 1 and --warmup >= 0")
+    if args.directions < 1:
+        raise ParameterError(f"--directions {args.directions}: expected an integer >= 1")
+    try:
+        exponents = [float(e) for e in args.exponents.split(",")]
+    except ValueError:
+        raise ParameterError(f"--exponents {args.exponents}: expected numbers > 0") from None
+    json_out = check_output_path(args.json_out) if args.json_out else None
+    session = RenderSession(_scene(args))
+    try:
+        session.method("hwconv").values["map_size"] = 512  # the paper's; --param overrides
+        apply_params(session, session.method("hwconv"), args.param)
+        if args.hwconv_accuracy:
+            report = run_accuracy(session, exponents, args.directions, progress=sys.stderr.isatty())
+        else:
+            report = run_table(
+                session, exponents, size, args.frames, args.warmup, progress=sys.stderr.isatty()
+            )
+    finally:
+        session.release()
+    print(format_accuracy(report) if args.hwconv_accuracy else format_table(report))
     if json_out:
         write_text_atomic(json_out, json.dumps(report, indent=2))
     return 0
@@ -292,6 +336,20 @@ def run_fit_glossiness(args: argparse.Namespace) -> int:
         f"{model['residual_rms']:.3f} levels over {model['points_used']} points"
     )
     return 0
+
+
+def run_prefilter(args: argparse.Namespace) -> int:
+    """``envstudio prefilter``: a prefiltered environment map computed on the CPU (seed 004)."""
+    from envstudio.render.prefilter_command import run_prefilter as prefilter
+
+    return prefilter(args)
+
+
+def run_bake(args: argparse.Namespace) -> int:
+    """``envstudio bake rsibr``: seed 002's radiance sphere maps to a .rsibr file."""
+    from envstudio.render.rsibr_command import run_bake_rsibr
+
+    return run_bake_rsibr(args)
 
 
 def run_compare(args: argparse.Namespace) -> int:
@@ -471,18 +529,42 @@ def _irradiance_check(radiance, directions, solid_angles, lighting, normals: int
 
 
 def run_figure(args: argparse.Namespace) -> int:
-    """``envstudio figure``: seed 000 Figure 6 (kautz-grid) or Figure 4 (kautz-seams)."""
+    """``envstudio figure``: seed 000 Figure 6 (kautz-grid) or Figure 4 (kautz-seams),
+    seed 004 Figure 3 (hwconv-distortion)."""
     from envstudio.render import figures
 
     size = parse_size(args.size)
     output = check_output_path(args.output)
     if output.suffix.lower() != ".png":
         raise ParameterError(f"-o {output}: expected a .png file name")
+    if args.name == "hwconv-distortion":
+        numbers = figures.write_distortion_figure(output)
+        radii = figures.FIGURE3_RADII
+        print(
+            f"{output}: distortion e(r, d) against d for r = {', '.join(map(str, radii))} "
+            f"(left), border distance over ρ at r = {max(radii)} (right); "
+            f"largest e {100 * numbers['max_error']:.1f} %"
+        )
+        for exponent, (r_l, e) in numbers["table"].items():
+            print(f"N = {exponent:>3}: r_l = {r_l:.3f} of the disc's radius, at the rim {e:.1%}")
+        return 0
     camera = parse_camera(args.camera) if args.camera else None
     session = RenderSession(_scene(args))
     try:
         if camera:
             session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+        if args.name == "banks-slices":
+            from envstudio.render import banks_figure
+
+            method = session.method("banks")
+            method.values.update(banks_figure.FIGURE6_VALUES)
+            apply_params(session, method, args.param)
+            image = banks_figure.render_slices(session, method, size)
+            angles = ", ".join(f"{a:g}°" for a in banks_figure.SLICE_ANGLES)
+            layout = f"s = {method.values['sharpness']:g}: reflector, slices at ∠(v,t) = {angles}"
+            write_image(output, image)
+            print(f"{output}: {layout}")
+            return 0
         method = session.method("kautz")
         if args.name == "kautz-grid":
             method.values.update(figures.FIGURE6_VALUES)
