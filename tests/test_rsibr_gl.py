@@ -14,6 +14,7 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene.primitives import uv_sphere
+from envstudio.scene_setup import build_scene
 
 N = 64
 
@@ -88,3 +89,110 @@ def test_bakes_are_cached_and_a_refused_file_is_baked_again(gl_ctx):
     for m in (first, second, third):
         m.release()
     session.release()
+
+
+def test_a_sharp_phong_sphere_looks_like_mirror(gl_ctx):
+    """N = 5000 is nearly a mirror: rsibr's frame is `mirror`'s, blurred by its 64² map.
+
+    Catches what the constant environments cannot: the warp's passes leave the depth
+    test off, and the reflector's back faces then land over its front faces.
+    """
+    scene = build_scene("studio", None, None)
+    scene.nodes[:] = [Node("sphere", uv_sphere(1.0, 48, 96))]
+    session = RenderSession(scene, ctx=gl_ctx)
+    images = []
+    for name, values in (
+        ("mirror", {"fresnel": 1.0, "kd": 0.0}),
+        ("rsibr", {"fresnel": 1.0, "kd": 0.0, "phong_exponent": 5000.0}),
+    ):
+        method = session.method(name)
+        method.values.update(values)
+        session.render_offscreen(method, (96, 96))
+        images.append(session.read_ldr().astype(np.float64) / 255.0)
+    session.release()
+    difference = np.abs(images[0] - images[1]).max(axis=-1)
+    assert difference.mean() < 0.03
+    assert (difference > 0.25).mean() < 0.03  # the blur at the lights and the silhouette
+
+
+def test_figure_rsibr_warp_writes_figure_4_whose_generated_panel_is_the_method_map(
+    gl_ctx, tmp_path, capsys
+):
+    from envstudio.cli import main
+    from envstudio.io.images import read_image
+    from envstudio.methods.rsibr.figure import to_ldr, upright
+
+    output = tmp_path / "figure4.png"
+    argv = ["figure", "rsibr-warp", "--param", "map_size=32", "--size", "64x64", "-o", output]
+    assert main([str(a) for a in argv]) == 0
+    assert "generated map" in capsys.readouterr().out
+    image = read_image(output)
+    image = np.asarray(image if image.dtype == np.uint8 else np.round(255 * image), np.uint8)
+    n = 64  # 32² maps drawn 2 pixels a texel
+    assert image.shape[:2] == (2 * n + 2, 4 * n + 6)
+
+    session = RenderSession(build_scene("studio", None, None), ctx=gl_ctx)
+    method = session.method("rsibr")
+    method.values["map_size"] = 32
+    session.render_offscreen(method, (64, 64))
+    generated = read_texture(method.generate(method.last_frame_d))[..., :3]
+    expected = upright(to_ldr(generated), 2)
+    y, x = n + 2, 3 * (n + 2)
+    np.testing.assert_array_equal(image[y : y + n, x : x + n, :3], expected)
+    # the three warped panels are not the generated one, and the sources differ from them
+    assert not np.array_equal(image[y : y + n, :n, :3], expected)
+    session.release()
+
+
+def test_window_bakes_in_the_background_and_the_panel_shows_figure_4(gl_ctx):
+    """With a frame budget every bake, the first one included, runs a view or more per
+    frame (progress in (0, 1), nothing drawn yet); the panel's Figure 4 section then draws
+    the seven thumbnails through the ImGui renderer."""
+    from imgui_bundle import imgui
+
+    from envstudio.ui.imgui_renderer import ImGuiRenderer
+    from envstudio.ui.panels import _panel_figure
+
+    session = RenderSession(build_scene("studio", None, None), ctx=gl_ctx)
+    method = session.method("rsibr")
+    method.values["map_size"] = 16
+    method.frame_budget_ms = 0.0  # one view per frame (the conftest's cache is empty)
+    session.render_offscreen(method, (32, 32))
+    assert method.progress() == 1 / 12
+    assert "baking phong maps 1/12" in method.status_line()
+    assert method.bake is None
+    for _ in range(11):
+        session.render_offscreen(method, (32, 32))
+    assert method.progress() is None and method.bake is not None
+
+    context = imgui.create_context()
+    imgui.get_io().set_ini_filename(None)
+    renderer = ImGuiRenderer(gl_ctx)
+    fbo = gl_ctx.simple_framebuffer((320, 240))
+    try:
+        io = imgui.get_io()
+        io.display_size = (320, 240)
+        io.delta_time = 1.0 / 60.0
+        imgui.new_frame()
+        imgui.set_next_window_pos((0, 0))
+        imgui.set_next_window_size((320, 240))
+        imgui.begin("Method")
+        imgui.set_next_item_open(True)
+        _panel_figure(method, renderer, session.renderer.display)
+        imgui.end()
+        imgui.render()
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 1.0)
+        renderer.render(imgui.get_draw_data())
+        assert len(method._thumbnails) == 7
+        drawn = {
+            cmd.get_tex_id() for lst in imgui.get_draw_data().cmd_lists for cmd in lst.cmd_buffer
+        }
+        assert {tex.glo for tex in method._thumbnails} <= drawn
+        pixels = np.frombuffer(fbo.read(components=3), np.uint8)
+        assert pixels.reshape(240, 320, 3).std() > 10.0
+    finally:
+        renderer.release()
+        fbo.release()
+        imgui.destroy_context(context)
+        session.release()

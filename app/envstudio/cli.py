@@ -241,11 +241,12 @@ def build_parser() -> argparse.ArgumentParser:
     figure = sub.add_parser("figure", help="render a figure of a seed paper")
     figure.add_argument(
         "name",
-        choices=("kautz-grid", "kautz-seams", "hwconv-distortion", "banks-slices"),
+        choices=("kautz-grid", "kautz-seams", "hwconv-distortion", "banks-slices", "rsibr-warp"),
         help="kautz-grid: seed 000 Figure 6 (b x f_lambda); kautz-seams: Figure 4, "
         "box vs cross-face mip chain at b = 9.4, with the seam measurement; "
         "hwconv-distortion: seed 004 Figure 3, a paraboloid kernel's distortion on the "
-        "sphere (no GL; the scene options are ignored)",
+        "sphere (no GL; the scene options are ignored); rsibr-warp: seed 002 Figure 4, "
+        "the three source maps, their warps into the camera's frame and the generated map",
     )
     _add_scene_options(figure)
     _add_param_option(figure)

@@ -553,6 +553,30 @@ def run_figure(args: argparse.Namespace) -> int:
     try:
         if camera:
             session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+        if args.name == "rsibr-warp":
+            from envstudio.methods.rsibr import figure as rsibr_figure
+
+            method = session.method("rsibr")
+            apply_params(session, method, args.param)
+            session.render_offscreen(method, size)
+            figure = rsibr_figure.figure4(method, method.last_frame_d)
+            n = figure.generated.shape[0]
+            display = session.renderer.display
+            image = rsibr_figure.figure_image(
+                figure,
+                float(display["exposure"]),
+                str(display["tonemap"]),
+                scale=max(1, size[1] // n),
+            )
+            write_image(output, image)
+            weights = ", ".join(
+                f"view {i} w = {w:.4f}" for i, w in zip(figure.indices, figure.weights, strict=True)
+            )
+            print(
+                f"{output}: top: source maps ({weights}); bottom: each warped into the "
+                f"camera's frame (times its singularity fade), then the generated map ({n}²)"
+            )
+            return 0
         if args.name == "banks-slices":
             from envstudio.render import banks_figure
 

@@ -46,6 +46,9 @@ class Method(ABC):
     parameters: ClassVar[tuple[Parameter, ...]] = ()
     #: The image builds up over frames (a frame is one batch of an accumulation).
     progressive: ClassVar[bool] = False
+    #: Title of a collapsing section of the Method panel showing :meth:`panel_images`
+    #: ("" for none).
+    panel_figure: ClassVar[str] = ""
 
     def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary):
         self.ctx = ctx
@@ -66,6 +69,18 @@ class Method(ABC):
     def status_line(self) -> str:
         """One line of progress for the UI and the CLI (empty for one-shot methods)."""
         return ""
+
+    def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
+        """Labelled 8-bit images for the panel's :attr:`panel_figure` section (row 0 on top).
+
+        Called only while that section is open, after the frame was drawn; ``exposure``
+        and ``tonemap`` are the display's settings.
+        """
+        return []
+
+    def progress(self) -> float | None:
+        """Fraction done of background work the UI shows as a progress bar (None: none)."""
+        return None
 
     def release(self) -> None:  # noqa: B027  (optional hook: most methods own nothing extra)
         """Free GPU resources the method owns; safe to call twice."""

@@ -473,7 +473,14 @@ class Viewer(WindowConfig):
 
     def _panels(self, size: tuple[int, int]) -> None:
         method = self.method(self.method_name)
-        picked = method_panel(self.methods, method, self.session.scene, self.status)
+        picked = method_panel(
+            self.methods,
+            method,
+            self.session.scene,
+            self.status,
+            self.gui,
+            self.session.renderer.display,
+        )
         if picked:
             self.select_method(picked)
         scene_panel(

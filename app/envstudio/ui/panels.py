@@ -29,6 +29,7 @@ from envstudio.render.session import material_values
 from envstudio.scene.graph import Scene
 from envstudio.ui.capture import FORMATS
 from envstudio.ui.file_dialogs import OpenFileDialog
+from envstudio.ui.imgui_renderer import ImGuiRenderer
 from envstudio.ui.jobs import DeferredWork
 from envstudio.ui.parameter_widgets import parameter_widgets
 from envstudio.ui.scene_control import SceneControl
@@ -84,7 +85,12 @@ def _end() -> None:
 
 
 def method_panel(
-    methods: dict[str, type[Method]], method: Method, scene: Scene, status: StatusLine
+    methods: dict[str, type[Method]],
+    method: Method,
+    scene: Scene,
+    status: StatusLine,
+    gui: ImGuiRenderer | None = None,
+    display: ParameterValues | None = None,
 ) -> str | None:
     """Method picker and the parameters of ``method``; returns a newly picked name or None.
 
@@ -98,6 +104,9 @@ def method_panel(
         The scene, whose first reflector's material "Reset" restores.
     status
         Receives rejected values.
+    gui, display
+        The ImGui renderer and the display settings: with both, a method's
+        ``panel_figure`` section shows its ``panel_images`` (drawn only while open).
     """
     picked = None
     if _begin("Method"):
@@ -124,8 +133,33 @@ def method_panel(
             imgui.separator()
             colour = (0.4, 0.9, 0.4, 1.0) if method.finished() else (1.0, 0.8, 0.3, 1.0)
             imgui.text_colored(colour, progress)
+        fraction = method.progress()
+        if fraction is not None:
+            imgui.progress_bar(fraction, (-1.0, 0.0), f"{100 * fraction:.0f} %")
+        if method.panel_figure and gui is not None and display is not None:
+            _panel_figure(method, gui, display)
     _end()
     return picked
+
+
+def _panel_figure(method: Method, gui: ImGuiRenderer, display: ParameterValues) -> None:
+    """The method's ``panel_figure`` section: three images on the first row, the rest on the
+    second (rsibr: the sources, then their warps and the generated map); labels as tooltips,
+    the first three also as text."""
+    if not imgui.collapsing_header(method.panel_figure):
+        return
+    images = method.panel_images(float(display["exposure"]), str(display["tonemap"]))
+    if not images:
+        imgui.text_disabled("after the first bake")
+        return
+    spacing = imgui.get_style().item_spacing.x
+    edge = max((imgui.get_content_region_avail().x - 3 * spacing) / 4, 8.0)
+    for index, (label, texture) in enumerate(images):
+        if index not in (0, 3):
+            imgui.same_line()
+        imgui.image(gui.register_texture(texture), (edge, edge))
+        imgui.set_item_tooltip(label)
+    imgui.text_wrapped(", ".join(label for label, _ in images[:3]))
 
 
 def _reset(values: ParameterValues, scene: Scene) -> None:

@@ -11,7 +11,8 @@ declaration validates it::
     bool    checkbox
     choice  combo of ``choices``
 
-The unit and help text form the tooltip.
+The unit and help text form the tooltip. A number typed past its range
+(Ctrl+click on a slider) is clamped to it and the clamp is noted in the status line.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from envstudio.errors import ParameterError
 from envstudio.methods.parameters import Parameter, ParameterValues
 from envstudio.ui.status import StatusLine
 
-_CLAMP = imgui.SliderFlags_.always_clamp
+_CLAMP = imgui.SliderFlags_.none
+"""Sliders do not clamp typed values themselves, so that a clamp can be noted."""
 _FLOAT = "%.4g"
 
 
@@ -32,10 +34,37 @@ def tooltip(param: Parameter) -> str:
     return f"{param.help}{unit}".strip()
 
 
-def parameter_widget(values: ParameterValues, param: Parameter) -> None:
+def clamp_note(param: Parameter, value):
+    """``value`` clamped to the range of ``param``, and a note when it was out of it.
+
+    Returns
+    -------
+    value
+        The value, inside ``[minimum, maximum]`` for bounded numbers.
+    str or None
+        ``"phong_exponent 9000 is out of [1, 5000]: clamped to 5000"``, or None.
+    """
+    if param.kind not in ("float", "int") or param.minimum is None or param.maximum is None:
+        return value, None
+    clamped = min(max(value, param.minimum), param.maximum)
+    if clamped == value:
+        return value, None
+    clamped = type(value)(clamped)
+    return clamped, (
+        f"{param.name} {value:g} is out of [{param.minimum:g}, {param.maximum:g}]: "
+        f"clamped to {clamped:g}"
+    )
+
+
+def parameter_widget(values: ParameterValues, param: Parameter) -> str | None:
     """Draw the widget of ``param`` and assign the value the user gives it.
 
     Numbers declared without a range get a drag field instead of a slider.
+
+    Returns
+    -------
+    str or None
+        A note when the value typed was out of range and was clamped (:func:`clamp_note`).
 
     Raises
     ------
@@ -68,14 +97,19 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> None:
     text = tooltip(param)
     if text:
         imgui.set_item_tooltip(text)
+    note = None
     if changed:
+        value, note = clamp_note(param, value)
         values[param.name] = value
+    return note
 
 
 def parameter_widgets(values: ParameterValues, status: StatusLine) -> None:
-    """Draw a widget per declared parameter; a rejected value goes to ``status``."""
+    """Draw a widget per declared parameter; a clamp is noted, a rejected value is an error."""
     for param in values:
         try:
-            parameter_widget(values, param)
+            note = parameter_widget(values, param)
+            if note:
+                status.note(note)
         except ParameterError as exc:
             status.error(str(exc))

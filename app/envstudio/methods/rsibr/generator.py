@@ -109,6 +109,7 @@ class MapGenerator:
         fade: bool = True,
         fade_radius: float = 0.1,
         per_pixel: bool = False,
+        only: int | None = None,
     ) -> moderngl.Texture:
         """The map for destination frame ``frame_d`` (§4's warp and blending loop).
 
@@ -132,6 +133,10 @@ class MapGenerator:
             Singularity fade (§3.3) and its radius in map units (normal warp: in n·v_s).
         per_pixel
             Evaluate the warp per fragment instead of per disk vertex.
+        only
+            Draw only the face's source at this position (0, 1, 2): the result is that
+            source warped into T_d alone (faded near its singularity, divided by its
+            weight), Figure 4's middle row. :attr:`sources` still lists all three.
 
         Returns
         -------
@@ -155,8 +160,12 @@ class MapGenerator:
         set_uniform(program, "u_fade_radius", float(fade_radius))
         set_uniform(program, "u_source", 0)
         frames = np.asarray(frames, dtype=np.float64)
-        for index, weight in zip(indices, weights, strict=True):
-            if weight <= 0.0:
+        for position, (index, weight) in enumerate(zip(indices, weights, strict=True)):
+            if only is not None:
+                if position != only:
+                    continue
+                weight = 1.0
+            elif weight <= 0.0:
                 continue
             maps[index].use(location=0)
             set_uniform(program, "u_dest_to_source", frames[index].T @ frame_d)

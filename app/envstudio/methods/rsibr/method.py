@@ -14,9 +14,11 @@ disk and blended into a float target with its mip chain (methods.rsibr.generator
 the reflectors are drawn sphere-mapped from it (shaders/rsibr/rsibr.glsl), with
 Fresnel and the diffuse term added where the BRDF's maps do not hold them.
 
-A change of the BRDF or of a parameter it bakes starts a new bake; the first bake
-runs at once (64² maps take about a second on llvmpipe), later ones run a few views
-per frame within the window's frame budget while the old maps stay in use.
+A change of the BRDF or of a parameter it bakes starts a new bake. Headless
+(``frame_budget_ms`` None) it runs at once; in the window every bake, the first
+included, runs a few views per frame within the frame budget (at least one view per
+frame) while the old maps stay in use (before the first, the reflectors are not
+drawn), and :meth:`progress` feeds the Method panel's progress bar.
 
 Past the paper: ``per_pixel`` evaluates the warp per fragment instead of on the
 disk's vertices (§6's future work).
@@ -39,6 +41,7 @@ from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.base import Method, register
 from envstudio.methods.context import FrameInputs, StaticEnvironment
 from envstudio.methods.parameters import Parameter
+from envstudio.methods.rsibr.figure import figure4, to_ldr, upright
 from envstudio.methods.rsibr.generator import MapGenerator
 
 __all__ = ["RsibrMethod"]
@@ -57,6 +60,7 @@ class RsibrMethod(Method):
         "Radiance sphere maps baked at the icosahedron's views, warped in reflection space "
         "and blended by spherical barycentrics per frame."
     )
+    panel_figure = "Figure 4: sources, warped, generated"
     parameters = (
         Parameter(
             "brdf", "choice", "phong", unit="", help="BRDF of the maps.", choices=tuple(BRDFS)
@@ -88,6 +92,9 @@ class RsibrMethod(Method):
         self._wanted: tuple | None = None
         self._env_keys: dict[tuple, str] = {}
         self.last_bake_seconds: float | None = None
+        #: T_d of the last frame drawn (Figure 4's destination frame).
+        self.last_frame_d: np.ndarray | None = None
+        self._thumbnails: list[moderngl.Texture] = []
 
     # -- bakes --------------------------------------------------------------------------
 
@@ -113,7 +120,7 @@ class RsibrMethod(Method):
         if self._pending is None or self._pending["key"] != wanted:
             self._start(wanted, static)
         if self._pending is not None:
-            budget = None if self.bake is None else self.frame_budget_ms
+            budget = self.frame_budget_ms
             with frame.timer.measure("rsibr.bake"):
                 self._continue(budget)
 
@@ -159,7 +166,8 @@ class RsibrMethod(Method):
                     baker.bake(job["cube"], job["key"][2], job["values"], frame[None])[0]
                 )
                 spent = 1e3 * (time.perf_counter() - start)
-                if budget_ms is not None and spent > budget_ms:
+                more = len(job["maps"]) < len(job["views"])
+                if more and budget_ms is not None and spent > budget_ms:
                     return
         finally:
             baker.release()
@@ -190,8 +198,11 @@ class RsibrMethod(Method):
 
     # -- frames -------------------------------------------------------------------------
 
-    def generate(self, frame_d: np.ndarray) -> moderngl.Texture:
-        """The generated map for destination frame ``frame_d`` (3, 3) from the current bake."""
+    def generate(self, frame_d: np.ndarray, only: int | None = None) -> moderngl.Texture:
+        """The generated map for destination frame ``frame_d`` (3, 3) from the current bake.
+
+        ``only`` warps one of the face's three sources alone (MapGenerator.generate).
+        """
         if self._generator is None or self._generator.size != self.bake.size:
             if self._generator is not None:
                 self._generator.release()
@@ -208,15 +219,59 @@ class RsibrMethod(Method):
             fade=self.values["fade"],
             fade_radius=self.values["fade_radius"],
             per_pixel=self.values["per_pixel"],
+            only=only,
         )
+
+    def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
+        """Figure 4 of the last frame drawn, for the Method panel (methods.rsibr.figure).
+
+        Parameters
+        ----------
+        exposure, tonemap
+            The display's settings.
+
+        Returns
+        -------
+        list of (label, texture)
+            The three sources with their weights, their warped versions, the generated
+            map: (n, n) RGBA8 textures, upright, owned by the method (valid until the
+            next call); empty before the first bake.
+        """
+        if self.bake is None or self.last_frame_d is None:
+            return []
+        figure = figure4(self, self.last_frame_d)
+        images = [*figure.sources, *figure.warped, figure.generated]
+        pairs = zip(figure.indices, figure.weights, strict=True)
+        labels = [f"view {i}, w = {w:.3f}" for i, w in pairs]
+        labels += [f"view {i} warped" for i in figure.indices] + ["generated"]
+        size = figure.generated.shape[0]
+        if len(self._thumbnails) != len(images) or self._thumbnails[0].size != (size, size):
+            self._release_thumbnails()
+            self._thumbnails = [self.ctx.texture((size, size), 4) for _ in images]
+        for texture, image in zip(self._thumbnails, images, strict=True):
+            rgb = upright(to_ldr(image, exposure, tonemap))
+            rgba = np.concatenate([rgb, np.full((*rgb.shape[:2], 1), 255, np.uint8)], axis=-1)
+            texture.write(np.ascontiguousarray(rgba).tobytes())  # row 0 at the top, as ImGui
+        return list(zip(labels, self._thumbnails, strict=True))
+
+    def _release_thumbnails(self) -> None:
+        for tex in self._thumbnails:
+            tex.release()
+        self._thumbnails = []
 
     def render(self, frame: FrameInputs) -> None:
         static = frame.scene.static_environment(frame.timer)
         self._update_bake(frame, static)
+        if self.bake is None:
+            return  # the window's first bake is still under way: nothing to draw yet
         frame_d = np.asarray(frame.view, dtype=np.float64)[:3, :3].T
+        self.last_frame_d = frame_d
         with frame.timer.measure("rsibr.warp"):
             generated = self.generate(frame_d)
         frame.target.use()
+        # the warp and the bake draw without depth test: without it again, back faces of
+        # the reflector would land over front faces (and over the local objects)
+        self.ctx.enable(moderngl.DEPTH_TEST)
         program = self.programs.get("rsibr/rsibr.glsl")
         generated.use(location=0)
         static.cube.use(location=1)
@@ -238,6 +293,12 @@ class RsibrMethod(Method):
     def finished(self) -> bool:
         return self._pending is None
 
+    def progress(self) -> float | None:
+        """Fraction of the views of the bake under way, or None when none is."""
+        if self._pending is None:
+            return None
+        return len(self._pending["maps"]) / len(self._pending["views"])
+
     def status_line(self) -> str:
         if self._pending is not None:
             done, total = len(self._pending["maps"]), len(self._pending["views"])
@@ -251,6 +312,7 @@ class RsibrMethod(Method):
 
     def release(self) -> None:
         self._release_maps()
+        self._release_thumbnails()
         if self._generator is not None:
             self._generator.release()
         self._generator = None
