@@ -136,6 +136,12 @@ def build_parser() -> argparse.ArgumentParser:
         "(CPU), and with --json the time-against-size plot as PNG beside it",
     )
     bench.add_argument(
+        "--chain",
+        action="store_true",
+        help="with --prefilter: the GPU Phong cube mip chain instead (8 levels at 128² and 256², "
+        "time against cmft's and every level's error to the brute force)",
+    )
+    bench.add_argument(
         "--exponents",
         default="10,50,100,250,500",
         help="with --prefilter, --hwconv-table or --hwconv-accuracy: comma-separated Phong "
@@ -323,6 +329,20 @@ def _add_prefilter_parser(sub) -> None:
         "--check",
         action="store_true",
         help="--chain: every level against the brute force at its exponent (sampled texels)",
+    )
+    prefilter.add_argument(
+        "--device",
+        choices=("auto", "gpu", "cpu"),
+        default="auto",
+        help="--chain: auto (default) filters on the GPU when a GL context can be made, else "
+        "on the CPU (hierarchical)",
+    )
+    prefilter.add_argument(
+        "--samples",
+        type=int,
+        default=256,
+        help="--chain on the GPU: importance samples per texel of level 0, doubled per level "
+        "(default 256)",
     )
     prefilter.add_argument("-o", "--output", required=True, help="OUT.exr (--chain: or OUT.dds)")
 

@@ -33,10 +33,13 @@ from envstudio.prefilter.parallel import default_threads
 from envstudio.prefilter.targets import target_directions
 
 __all__ = [
+    "CMFT_SECONDS",
     "PAPER_TABLE",
     "SWEEP_EXPONENT",
     "SWEEP_FACES",
+    "format_chain_report",
     "format_prefilter_report",
+    "run_chain_bench",
     "run_prefilter_bench",
     "write_scaling_plot",
 ]
@@ -279,3 +282,100 @@ def write_scaling_plot(report: dict, path: str | os.PathLike) -> Path:
         fig.savefig(tmp, format="png")
     plt.close(fig)
     return path
+
+
+#: Issue 14: cmft (phongbrdf filter, both cores) on this machine type, an 8-level chain.
+CMFT_SECONDS = {128: 0.41, 256: 5.3}
+
+
+def run_chain_bench(
+    radiance: npt.ArrayLike,
+    sizes: Sequence[int] = (128, 256),
+    samples: int | None = None,
+    repeats: int = 3,
+    check: bool = True,
+) -> dict:
+    """Time the GPU chain (prefilter.chain_gpu) at each face size; with ``check``, its errors.
+
+    Parameters
+    ----------
+    radiance
+        (h, 2h, 3) lat-long source.
+    sizes
+        Level-0 face edges; each chain has 8 levels, gloss scale 10 and bias 1.
+    samples
+        Level-0 samples (default prefilter.chain_gpu.DEFAULT_SAMPLES).
+    repeats
+        Each time is the best of this many runs, after one untimed run that compiles
+        the program.
+    check
+        Also every level's RMS and max difference to the brute force
+        (render.prefilter_command.chain_level_error, 256 texels a level).
+
+    Returns
+    -------
+    dict
+        ``renderer``, ``context_seconds`` (making the context, not in the times),
+        ``samples`` and ``sizes``: per size ``seconds`` (best), ``runs``, cmft's seconds
+        and the speed-up over it, and ``levels`` (face, N, rms, max).
+    """
+    from envstudio.gpu.context import create_headless_context, describe
+    from envstudio.gpu.programs import ProgramLibrary
+    from envstudio.prefilter.chain_gpu import DEFAULT_SAMPLES, gpu_prefiltered_chain
+    from envstudio.render.prefilter_command import chain_level_error
+
+    samples = DEFAULT_SAMPLES if samples is None else samples
+    start = time.perf_counter()
+    ctx = create_headless_context()
+    context_seconds = time.perf_counter() - start
+    programs = ProgramLibrary(ctx)
+    report = {
+        "renderer": describe(ctx),
+        "context_seconds": context_seconds,
+        "samples": samples,
+        "load_average": os.getloadavg()[0],
+        "sizes": [],
+    }
+    try:
+        for size in sizes:
+            gpu_prefiltered_chain(ctx, programs, radiance, size, 8, 10.0, 1.0, samples)
+            runs, chain = [], None
+            for _ in range(repeats):
+                start = time.perf_counter()
+                chain = gpu_prefiltered_chain(ctx, programs, radiance, size, 8, 10.0, 1.0, samples)
+                runs.append(time.perf_counter() - start)
+            entry = {"size": size, "seconds": min(runs), "runs": runs}
+            if size in CMFT_SECONDS:
+                entry["cmft_seconds"] = CMFT_SECONDS[size]
+                entry["speedup_over_cmft"] = CMFT_SECONDS[size] / min(runs)
+            if check:
+                entry["levels"] = [
+                    {"face": level.faces.shape[1], "exponent": level.exponent}
+                    | dict(zip(("rms", "max"), chain_level_error(radiance, level), strict=True))
+                    for level in chain
+                ]
+            report["sizes"].append(entry)
+    finally:
+        programs.release()
+        ctx.release()
+    return report
+
+
+def format_chain_report(report: dict) -> str:
+    """The chain bench as text: time and speed-up per size, then each level's errors."""
+    lines = [
+        f"GPU chain on {report['renderer']}, {report['samples']} samples at level 0 "
+        f"(context {report['context_seconds']:.2f} s, not counted; "
+        f"load {report['load_average']:.1f})"
+    ]
+    for entry in report["sizes"]:
+        line = f"  {entry['size']}²: {entry['seconds']:.3f} s (best of {len(entry['runs'])})"
+        if "cmft_seconds" in entry:
+            line += f", cmft {entry['cmft_seconds']} s: {entry['speedup_over_cmft']:.2f}x"
+        lines.append(line)
+        for k, level in enumerate(entry.get("levels", [])):
+            lines.append(
+                f"    level {k}: {level['face']}² N = {level['exponent']:.4g}: "
+                f"rms {100 * level['rms']:.2f} %, max {100 * level['max']:.2f} % of the mean"
+            )
+    return "\n".join(lines)

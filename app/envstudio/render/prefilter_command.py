@@ -171,19 +171,47 @@ def run_chain(args: argparse.Namespace) -> int:
     suffix = output.suffix.lower()
     if suffix not in (".dds", ".exr"):
         raise ParameterError(f"-o {output}: expected a .dds or .exr file name")
+    device = getattr(args, "device", "cpu")
+    samples = getattr(args, "samples", 256)
+    if not 1 <= samples <= 16384:
+        raise ParameterError(f"--samples {samples}: expected 1..16384 importance samples")
     radiance = _source(args)
     check_memory(6 * size * size * 2, radiance.shape[0] * radiance.shape[1])
+    ctx = _chain_context(device)
     start = time.perf_counter()
-    chain = prefiltered_chain(
-        radiance,
-        size,
-        args.levels,
-        args.gloss_scale,
-        args.gloss_bias,
-        args.threshold,
-        threads=args.threads,
-        progress=sys.stderr.isatty(),
-    )
+    if ctx is not None:
+        from envstudio.gpu.context import describe
+        from envstudio.gpu.programs import ProgramLibrary
+        from envstudio.prefilter.chain_gpu import gpu_prefiltered_chain
+
+        programs = ProgramLibrary(ctx)
+        try:
+            chain = gpu_prefiltered_chain(
+                ctx,
+                programs,
+                radiance,
+                size,
+                args.levels,
+                args.gloss_scale,
+                args.gloss_bias,
+                samples,
+            )
+        finally:
+            programs.release()
+            where = f"GPU ({describe(ctx)}), {samples} samples at level 0"
+            ctx.release()
+    else:
+        chain = prefiltered_chain(
+            radiance,
+            size,
+            args.levels,
+            args.gloss_scale,
+            args.gloss_bias,
+            args.threshold,
+            threads=args.threads,
+            progress=sys.stderr.isatty(),
+        )
+        where = "CPU (hierarchical)"
     seconds = time.perf_counter() - start
     if suffix == ".dds":
         written = [write_dds_cube(output, [level.faces for level in chain])]
@@ -200,7 +228,10 @@ def run_chain(args: argparse.Namespace) -> int:
     }
     sh_path = output.with_name(f"{output.stem}.sh.json")
     write_text_atomic(sh_path, json.dumps(sh, indent=2) + "\n")
-    print(f"{', '.join(map(str, written))}, {sh_path}: {len(chain)} levels in {seconds:.2f} s")
+    print(
+        f"{', '.join(map(str, written))}, {sh_path}: {len(chain)} levels in {seconds:.2f} s "
+        f"on the {where}"
+    )
     for k, level in enumerate(chain):
         line = (
             f"  level {k}: {level.faces.shape[1]}² N = {level.exponent:.4g} "
@@ -211,6 +242,25 @@ def run_chain(args: argparse.Namespace) -> int:
             line += f", vs brute force: rms {100 * rms:.3f} %, max {100 * worst:.3f} % of the mean"
         print(line)
     return 0
+
+
+def _chain_context(device: str):
+    """The GL context the chain is filtered with: None for the CPU.
+
+    ``auto`` falls back to the CPU when no context can be made; ``gpu`` raises the
+    one-line ContextError instead.
+    """
+    if device == "cpu":
+        return None
+    from envstudio.errors import ContextError
+    from envstudio.gpu.context import create_headless_context
+
+    try:
+        return create_headless_context()
+    except ContextError:
+        if device == "gpu":
+            raise
+        return None
 
 
 def chain_level_error(radiance: np.ndarray, level, samples: int = 256) -> tuple[float, float]:
@@ -272,6 +322,8 @@ def run_prefilter_bench(args: argparse.Namespace) -> int:
     )
     from envstudio.resources import asset_root
 
+    if getattr(args, "chain", False):
+        return _run_chain_bench(args)
     face = _bench_face(args.size)
     exponents = _exponents(args.exponents)
     json_out = check_output_path(args.json_out) if args.json_out else None
@@ -296,4 +348,20 @@ def run_prefilter_bench(args: argparse.Namespace) -> int:
         write_text_atomic(json_out, json.dumps(report, indent=2))
         plot = write_scaling_plot(report, json_out.with_suffix(".png"))
         print(f"{json_out}, {plot}")
+    return 0
+
+
+def _run_chain_bench(args: argparse.Namespace) -> int:
+    """``envstudio bench --prefilter --chain``: the GPU chain's time and errors."""
+    from envstudio.render.prefilter_bench import format_chain_report, run_chain_bench
+    from envstudio.resources import asset_root
+
+    json_out = check_output_path(args.json_out) if args.json_out else None
+    env = args.env or str(asset_root() / "hdr" / "studio.exr")
+    report = run_chain_bench(read_environment(env))
+    report["environment"] = env
+    print(format_chain_report(report))
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+        print(json_out)
     return 0

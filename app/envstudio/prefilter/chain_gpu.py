@@ -1,0 +1,210 @@
+"""The Phong cube mip chain on the GPU: filtered importance sampling, one pass per level and face.
+
+The GPU twin of prefilter.chain.prefiltered_chain (the same levels, exponents
+N_k = 2^(scale · g_k + bias) and ChainLevel results), after issue 14's "computed
+on the GPU when a context is available". The lat-long source is uploaded with
+its mip chain (``build_mipmaps``, 2×2 boxes); every level is one fragment pass
+per face of shaders/prefilter/phong_chain.glsl, which integrates the normalised
+Phong lobe of seed 004 §4 (L_phong) by importance sampling with Křivánek and
+Colbert's filtered importance sampling (FIS, "Real-time Shading with Filtered
+Importance Sampling", EGSR 2008): sample s of pdf p_s stands for the solid angle
+Ω_s = 1 / (S p_s) and is read from the source mip level
+
+    lod_s = ½ log2(Ω_s / Ω_texel) + bias
+
+with Ω_texel = (π / h)² for a lat-long of h rows (a row's angle squared; see the
+shader on why not the texel's true solid angle) or (2 / n)² |l_ma|³ for a cube
+of face n (``source_kind="cube"``: the lat-long resampled into a cube first,
+envmap.conversions.latlong_to_cube; measured slightly less accurate and no
+faster on llvmpipe, so not the default). The pdf is the kernel itself,
+(N + 1)/2π cos^N θ, so every weight is 1: a constant map stays constant to
+rounding, and wide lobes (few samples for a hemisphere) read coarse,
+pre-averaged texels instead of aliasing.
+
+The samples are one Fibonacci lattice in the lobe's frame, shared by every
+texel (no noise; what remains is a smooth bias, measured against
+prefilter.brute_force in docs/prefilter/README.md). On studio.exr it was a
+third to a half more accurate than a Hammersley set of the same size. Level k
+takes S · 2^k samples (:func:`level_samples`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.envmap.conversions import latlong_to_cube, upload_latlong
+from envstudio.gpu.fullscreen import FullscreenPass
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.prefilter.chain import ChainLevel, gloss_exponents
+
+__all__ = [
+    "DEFAULT_SAMPLES",
+    "FIS_BIAS",
+    "MAX_SAMPLES",
+    "gpu_prefiltered_chain",
+    "level_samples",
+    "lobe_samples",
+    "source_face",
+]
+
+#: Importance samples per texel of level 0 (docs/prefilter/README.md: the error against the
+#: sample count); level k takes :func:`level_samples` of it.
+DEFAULT_SAMPLES = 256
+#: Most samples per texel at any level (the sample table's width, within every GL's texture limit).
+MAX_SAMPLES = 16384
+#: Added to every FIS level. Křivánek and Colbert add 1, trading aliasing for blur; with one
+#: lattice for every texel there is no noise to hide, and on studio.exr 0 halved the error of
+#: +1 at 256 samples, while −1 was worse again (docs/prefilter/README.md).
+FIS_BIAS = 0.0
+_SHADER = "prefilter/phong_chain.glsl"
+
+
+def lobe_samples(exponent: float, count: int, bias: float = FIS_BIAS) -> npt.NDArray[np.float32]:
+    """A Fibonacci lattice of samples of the normalised Phong lobe with their FIS source level.
+
+    Parameters
+    ----------
+    exponent
+        Phong exponent N > 0.
+    count
+        S, the number of samples.
+    bias
+        Added to every level (Křivánek and Colbert use 1).
+
+    Returns
+    -------
+    (count, 4) float32
+        (x, y, z, lod): the direction in the lobe's frame (z = cos θ about the lobe
+        axis), cos θ = u^(1/(N+1)) with u = (i + ½)/S and φ = 2π frac(i/ϕ) (ϕ the golden
+        ratio: the spherical Fibonacci lattice, mapped through the lobe's inverse CDF), and
+        lod = ½ log2 Ω_s + bias, Ω_s = 1 / (S p),
+        p = (N + 1)/2π cos^N θ, before the shader takes off ½ log2 of the source texel's
+        solid angle at the sample.
+    """
+    i = np.arange(count, dtype=np.float64)
+    u = (i + 0.5) / count
+    phi = 2.0 * np.pi * ((i * 0.5 * (math.sqrt(5.0) - 1.0)) % 1.0)
+    cos = u ** (1.0 / (exponent + 1.0))
+    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
+    # ln p = ln((N + 1)/2π) + N ln cos θ; cos θ ≥ u^(1/(N+1)) > 0.
+    log2_pdf = (math.log((exponent + 1.0) / (2.0 * math.pi)) + exponent * np.log(cos)) / math.log(2)
+    log2_omega_s = -math.log2(count) - log2_pdf
+    lod = 0.5 * log2_omega_s + bias
+    return np.stack([sin * np.cos(phi), sin * np.sin(phi), cos, lod], axis=1).astype(np.float32)
+
+
+def level_samples(samples: int, level: int) -> int:
+    """Samples per texel at level k: S · 2^k, at most :data:`MAX_SAMPLES`.
+
+    Each level has a quarter of the texels of the one above and a wider lobe over
+    brighter, sharper detail (the map's lights), so doubling S per level halves
+    the cost per level: the whole chain costs about twice its level 0.
+    """
+    return int(min(MAX_SAMPLES, samples << level))
+
+
+def source_face(rows: int, size: int) -> int:
+    """n_src: the power of two nearest the lat-long's h/2 rows (its texels' angle), at least n."""
+    return max(size, 1 << max(0, round(math.log2(max(1, rows // 2)))))
+
+
+def gpu_prefiltered_chain(
+    ctx: moderngl.Context,
+    programs: ProgramLibrary,
+    radiance: npt.ArrayLike,
+    size: int,
+    levels: int,
+    scale: float,
+    bias: float,
+    samples: int = DEFAULT_SAMPLES,
+    *,
+    fis_bias: float = FIS_BIAS,
+    source_size: int | None = None,
+    source_kind: str = "latlong",
+) -> list[ChainLevel]:
+    """Prefilter every level of the chain on the GPU (module docstring).
+
+    Parameters
+    ----------
+    ctx, programs
+        A context (OpenGL 3.3 or later) and its program library.
+    radiance
+        (h, 2h, 3) lat-long radiance.
+    size
+        Face edge n of level 0, a power of two.
+    levels
+        L, 1 ≤ L ≤ log2(n) + 1.
+    scale, bias
+        The glossiness mapping's constants (prefilter.chain.gloss_exponents).
+    samples
+        S, importance samples per texel of level 0 (level k: :func:`level_samples`).
+    fis_bias
+        Added to every sample's source level (:data:`FIS_BIAS`).
+    source_size
+        n_src, the source cube's face edge; default :func:`source_face`.
+    source_kind
+        ``"latlong"``: sample the lat-long texture and its mip chain directly;
+        ``"cube"``: resample it into a cube of face n_src first.
+
+    Returns
+    -------
+    list of ChainLevel
+        Largest first, faces (6, n_k, n_k, 3) float32 in core.cubemap order, as
+        prefilter.chain.prefiltered_chain returns them.
+    """
+    image = np.asarray(radiance, dtype=np.float32)
+    rows = image.shape[0]
+    latlong = upload_latlong(ctx, image)
+    if source_kind == "cube":
+        n_src = source_face(rows, size) if source_size is None else int(source_size)
+        source = latlong_to_cube(ctx, programs, latlong, n_src)
+        latlong.release()
+        coarsest = n_src.bit_length() - 1
+        texel_log2 = math.log2(2.0 / n_src)
+    else:
+        source = latlong
+        source.build_mipmaps()
+        source.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        coarsest = (2 * rows).bit_length() - 1
+        texel_log2 = math.log2(math.pi / rows)
+    program = programs.get(_SHADER, {"SOURCE": 0 if source_kind == "cube" else 1})
+    quad = FullscreenPass(ctx)
+    chain = []
+    try:
+        source.use(0)
+        program["u_source"].value = 0
+        program["u_source_max"].value = float(coarsest)
+        program["u_texel_log2"].value = texel_log2
+        program["u_table"].value = 1
+        for k, exponent in enumerate(gloss_exponents(levels, scale, bias)):
+            m = max(1, size >> k)
+            count = level_samples(samples, k)
+            table = lobe_samples(exponent, count, fis_bias)
+            table_tex = ctx.texture((count, 1), 4, table.tobytes(), dtype="f4")
+            table_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            target = ctx.texture((m, m), 4, dtype="f4")
+            fbo = ctx.framebuffer([target])
+            scope = ctx.scope(fbo, enable_only=moderngl.NOTHING)
+            try:
+                table_tex.use(1)
+                program["u_count"].value = count
+                program["u_size"].value = float(m)
+                faces = []
+                with scope:
+                    for face in range(6):
+                        program["u_face"].value = face
+                        quad.draw(program)
+                        data = fbo.read(components=4, dtype="f4")
+                        faces.append(np.frombuffer(data, np.float32).reshape(m, m, 4)[..., :3])
+            finally:
+                for obj in (scope, fbo, target, table_tex):
+                    obj.release()
+            chain.append(ChainLevel(np.stack(faces), exponent, rows))
+    finally:
+        quad.release()
+        source.release()
+    return chain
