@@ -181,3 +181,21 @@ def test_a_time_limit_for_a_one_frame_method_or_out_of_range_is_one_line(capsys,
     status, err = run_cli(capsys, *argv)
     assert_one_line_error(status, err, "time_limit=-1", "[0, 1e+06]")
     assert not png.exists() and not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("material", "fragments"),
+    [
+        ("sharpness = 1.5", ["object[0].material.sharpness = 1.5", "[0, 1)"]),
+        ('tangent_field = "spiral"', ["object[0].material.tangent_field = 'spiral'", "uv"]),
+        ('tangent_axis = "w"', ["object[0].material.tangent_axis = 'w'", "x, y, z"]),
+    ],
+)
+def test_bad_banks_material_in_a_scene_file(capsys, tmp_path, material, fragments):
+    scene = tmp_path / "brushed.toml"
+    scene.write_text(
+        '[environment]\nfile = "hdr/studio.exr"\n[[object]]\nprimitive = "sphere"\n'
+        f"[object.material]\n{material}\n"
+    )
+    status, err = run_cli(capsys, "render", "--scene", str(scene), "-o", str(tmp_path / "o.png"))
+    assert_one_line_error(status, err, "brushed.toml", *fragments)

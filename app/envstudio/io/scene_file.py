@@ -24,6 +24,10 @@ Example::
     kd = [0.0, 0.0, 0.0]
     fresnel = 1.0
     phong_exponent = 200.0
+    sharpness = 0.9                  # Banks s in [0, 1) (seed 004 §5.3)
+    tangent_field = "axis"           # axis | direction | radial | uv (scene/tangents.py)
+    tangent_axis = "y"               # x | y | z: the axis (axis, radial) or direction
+    model = "banks"                  # optional: the reference's BRDF (phong | microfacet | banks)
 """
 
 from __future__ import annotations
@@ -44,6 +48,12 @@ from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.material import Material
 from envstudio.scene.mesh import MeshData
 from envstudio.scene.primitives import box, uv_sphere
+from envstudio.scene.tangents import AXES, FIELDS, TangentField
+
+#: The reference's BRDF models a material may name (methods/reference.py MODELS).
+MODELS = ("phong", "microfacet", "banks")
+#: The largest Banks sharpness the methods accept (their ``sharpness`` parameter).
+SHARPNESS_MAX = 0.9999
 
 
 def shipped_scenes() -> dict[str, Path]:
@@ -145,6 +155,27 @@ class _SceneReader:
             raise InputFileError(f"{self.path}: {where}.{key} = {value!r}, expected [x, y, z]")
         return tuple(float(v) for v in value)
 
+    def choice(
+        self, spec: dict, key: str, default: str | None, choices: tuple[str, ...], where: str
+    ) -> str | None:
+        """``spec[key]`` (or ``default`` when absent), one of ``choices``, else a one-line error."""
+        value = spec.get(key, default)
+        if value is not default and value not in choices:
+            raise InputFileError(
+                f"{self.path}: {where}.{key} = {value!r}, expected one of {', '.join(choices)}"
+            )
+        return value
+
+    def sharpness(self, spec: dict, where: str) -> float:
+        """The Banks sharpness s ∈ [0, :data:`SHARPNESS_MAX`] (default 0.9), else an error."""
+        value = self.number(spec, "sharpness", 0.9, where)
+        if not 0.0 <= value <= SHARPNESS_MAX:
+            raise InputFileError(
+                f"{self.path}: {where}.sharpness = {value!r}, expected a number in [0, 1) "
+                f"(at most {SHARPNESS_MAX})"
+            )
+        return value
+
     def node(self, index: int, spec: dict[str, Any]) -> Node:
         where = f"object[{index}]"
         name = str(spec.get("name", f"object{index}"))
@@ -163,6 +194,12 @@ class _SceneReader:
             kd=kd,
             fresnel=self.number(mat, "fresnel", 1.0, f"{where}.material"),
             phong_exponent=self.number(mat, "phong_exponent", 200.0, f"{where}.material"),
+            sharpness=self.sharpness(mat, f"{where}.material"),
+            tangent_field=TangentField(
+                self.choice(mat, "tangent_field", "axis", FIELDS, f"{where}.material"),
+                self.choice(mat, "tangent_axis", "y", tuple(AXES), f"{where}.material"),
+            ),
+            model=self.choice(mat, "model", None, MODELS, f"{where}.material"),
         )
         transform = Transform(
             self.vector(spec, "translation", (0.0, 0.0, 0.0), where),

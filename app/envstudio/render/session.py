@@ -25,7 +25,8 @@ def material_values(scene: Scene) -> dict[str, float | str]:
     if not reflectors:
         return {}
     material = reflectors[0].material
-    return {
+    model = {} if material.model is None else {"model": material.model}
+    return model | {
         "kd": float(np.mean(material.kd)),
         "fresnel": material.fresnel,
         "phong_exponent": material.phong_exponent,

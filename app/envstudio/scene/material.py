@@ -23,6 +23,9 @@ class Material:
         s ∈ [0, 1) of the Banks BRDF (seed 004 §5.3), for anisotropic methods.
     tangent_field : TangentField
         Where the anisotropic methods' tangents come from (scene/tangents.py).
+    model : str or None
+        The BRDF the ``reference`` integrates (``phong``, ``microfacet``, ``banks``)
+        when the scene names one; None leaves the reference's own setting.
     """
 
     kd: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -30,4 +33,5 @@ class Material:
     phong_exponent: float = 200.0
     sharpness: float = 0.9
     tangent_field: TangentField = field(default_factory=TangentField)
+    model: str | None = None
     extra: dict[str, float] = field(default_factory=dict)

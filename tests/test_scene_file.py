@@ -1,0 +1,88 @@
+"""Scene files: the Banks material keys (sharpness, tangent field, model) and the brushed scene."""
+
+import pytest
+
+from envstudio.errors import InputFileError
+from envstudio.io.scene_file import MODELS, load_scene, shipped_scenes
+from envstudio.render.session import material_values
+from envstudio.scene.tangents import TangentField
+
+SCENE = """[environment]
+file = "hdr/studio.exr"
+[[object]]
+primitive = "sphere"
+[object.material]
+{material}
+"""
+
+
+def write_scene(tmp_path, material: str):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE.format(material=material))
+    return path
+
+
+def test_brushed_scene_is_a_banks_teapot_around_y():
+    assert "brushed" in shipped_scenes()
+    scene = load_scene("brushed")
+    (teapot,) = scene.reflectors()
+    assert teapot.material.tangent_field == TangentField("axis", "y")
+    assert teapot.material.model == "banks"
+    values = material_values(scene)
+    assert values["model"] == "banks"
+    assert values["sharpness"] == pytest.approx(0.9)
+    assert (values["tangent_field"], values["tangent_axis"]) == ("axis", "y")
+
+
+def test_material_keys_are_read_and_default(tmp_path):
+    material = load_scene(write_scene(tmp_path, "")).reflectors()[0].material
+    assert material.sharpness == pytest.approx(0.9)
+    assert material.tangent_field == TangentField()
+    assert material.model is None
+    assert "model" not in material_values(load_scene("studio"))
+
+
+@pytest.mark.parametrize(
+    ("text", "sharpness", "field"),
+    [
+        (
+            'sharpness = 0.5\ntangent_field = "direction"\ntangent_axis = "x"',
+            0.5,
+            ("direction", "x"),
+        ),
+        ('sharpness = 0\ntangent_field = "radial"\ntangent_axis = "z"', 0.0, ("radial", "z")),
+        ('sharpness = 0.99\ntangent_field = "uv"', 0.99, ("uv", "y")),
+    ],
+)
+def test_tangent_fields(tmp_path, text, sharpness, field):
+    material = load_scene(write_scene(tmp_path, text)).reflectors()[0].material
+    assert material.sharpness == pytest.approx(sharpness)
+    assert material.tangent_field == TangentField(*field)
+
+
+def test_models_match_the_reference():
+    from envstudio.methods.reference import MODELS as REFERENCE_MODELS
+
+    assert MODELS == REFERENCE_MODELS
+
+
+@pytest.mark.parametrize(
+    ("text", "fragments"),
+    [
+        ("sharpness = 1.0", ["material.sharpness = 1.0", "[0, 1)"]),
+        ("sharpness = -0.1", ["material.sharpness = -0.1", "[0, 1)"]),
+        ('sharpness = "high"', ["material.sharpness = 'high'", "expected a number"]),
+        ('tangent_field = "spiral"', ["material.tangent_field = 'spiral'", "axis, direction"]),
+        ('tangent_axis = "w"', ["material.tangent_axis = 'w'", "x, y, z"]),
+        ("tangent_axis = [0, 1, 0]", ["material.tangent_axis = [0, 1, 0]", "x, y, z"]),
+        ('model = "lambert"', ["material.model = 'lambert'", "phong, microfacet, banks"]),
+    ],
+)
+def test_bad_material_values_name_file_and_key(tmp_path, text, fragments):
+    with pytest.raises(InputFileError) as info:
+        load_scene(write_scene(tmp_path, text))
+    message = str(info.value)
+    assert "\n" not in message
+    assert "scene.toml" in message and "object[0]" in message
+    for fragment in fragments:
+        assert fragment in message, message
