@@ -5,9 +5,17 @@ import numpy as np
 import pytest
 
 from envstudio.core import latlong
+from envstudio.core.colormap import magma
 from envstudio.errors import ParameterError
+from envstudio.io.images import read_image
 from envstudio.prefilter.brute_force import phong
-from envstudio.render.hwconv_accuracy import format_accuracy, run_accuracy
+from envstudio.render.hwconv_accuracy import (
+    MODES,
+    error_image_panels,
+    format_accuracy,
+    run_accuracy,
+    write_error_images,
+)
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_bad_input import assert_one_line_error, run_cli
@@ -167,6 +175,34 @@ def test_accuracy_bench_reads_back_what_the_reflector_shows(smooth_session):
     assert row["two_pass"]["rms"] < 0.005 and row["two_pass"]["max"] < 0.02, row
     assert row["exact"]["rms"] < row["two_pass"]["rms"] < row["one_pass"]["rms"], row
     assert "| 20 | 0." in format_accuracy(report)
+
+
+def test_accuracy_error_images_encode_the_tables_errors(smooth_session, tmp_path):
+    """One PNG per exponent beside the JSON; decoding each panel's colours through the
+    colour map gives back the table's maximum (within the 8-bit quantisation), and
+    an error of zero is the colour map's zero colour."""
+    smooth_session.method("hwconv").values.update({"map_size": 32, "border": 8})
+    errors: dict = {}
+    report = run_accuracy(smooth_session, [20.0], 256, progress=False, errors=errors)
+    scale, face = 0.05, 48
+    (path,) = write_error_images(report, errors, tmp_path / "acc.json", scale=scale, face=face)
+    assert path == tmp_path / "acc.error_N20.png"
+    image = read_image(path)[..., :3]
+    ramp = magma(np.linspace(0.0, 1.0, 2048))
+    row = report["rows"][0]
+    for mode, (top, left, size) in error_image_panels(face).items():
+        pixels = np.concatenate(
+            [image[top : top + size, x : x + size] for x in (left, left + size + 4)], axis=1
+        ).reshape(-1, 3)
+        on_ramp = np.linalg.norm(pixels - 1.0, axis=-1) > 1e-3  # not the white outside
+        nearest = np.argmin(np.linalg.norm(pixels[on_ramp, None] - ramp[None], axis=-1), -1)
+        decoded = nearest.max() / (len(ramp) - 1) * scale
+        assert decoded == pytest.approx(min(row[mode]["max"], scale), abs=0.01 * scale), mode
+    zero = {(20.0, mode): np.zeros_like(e) for (_, mode), e in errors.items()}
+    (path,) = write_error_images(report, zero, tmp_path / "zero.json", scale=scale, face=face)
+    top, left, size = error_image_panels(face)[next(iter(MODES))]
+    centre = read_image(path)[top + size // 2, left + size // 2, :3]
+    assert np.abs(centre - magma(0.0)).max() <= 0.5 / 255 + 1e-6
 
 
 def test_accuracy_bench_refuses_a_scene_with_local_objects(capsys):

@@ -158,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--hwconv-accuracy",
         action="store_true",
         help="for --methods hwconv: RMS and max relative error of 2-pass, 1-pass and exact "
-        "against the brute-force Phong prefilter at --exponents (map_size 512 unless --param)",
+        "against the brute-force Phong prefilter at --exponents (map_size 512 unless --param); "
+        "with --json, the error images per exponent as PNGs beside it (OUT.error_N<N>.png)",
     )
     bench.add_argument(
         "--directions",

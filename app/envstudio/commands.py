@@ -232,7 +232,12 @@ def run_bench(args: argparse.Namespace) -> int:
 def _run_hwconv_table(args: argparse.Namespace, size: tuple[int, int]) -> int:
     """``envstudio bench --methods hwconv --hwconv-table``: seed 004 §5.2's table;
     ``--hwconv-accuracy``: its error against the brute-force Phong prefilter."""
-    from envstudio.render.hwconv_accuracy import format_accuracy, run_accuracy
+    from envstudio.render.hwconv_accuracy import (
+        format_accuracy,
+        format_error_images,
+        run_accuracy,
+        write_error_images,
+    )
     from envstudio.render.hwconv_bench import format_table, run_table
 
     flag = "--hwconv-accuracy" if args.hwconv_accuracy else "--hwconv-table"
@@ -254,7 +259,10 @@ def _run_hwconv_table(args: argparse.Namespace, size: tuple[int, int]) -> int:
         session.method("hwconv").values["map_size"] = 512  # the paper's; --param overrides
         apply_params(session, session.method("hwconv"), args.param)
         if args.hwconv_accuracy:
-            report = run_accuracy(session, exponents, args.directions, progress=sys.stderr.isatty())
+            errors: dict = {}
+            report = run_accuracy(
+                session, exponents, args.directions, progress=sys.stderr.isatty(), errors=errors
+            )
         else:
             report = run_table(
                 session, exponents, size, args.frames, args.warmup, progress=sys.stderr.isatty()
@@ -262,6 +270,10 @@ def _run_hwconv_table(args: argparse.Namespace, size: tuple[int, int]) -> int:
     finally:
         session.release()
     print(format_accuracy(report) if args.hwconv_accuracy else format_table(report))
+    if json_out and args.hwconv_accuracy:  # the error images beside OUT, listed in it
+        images = write_error_images(report, errors, json_out)
+        report["error_images"] = {"scale": 1.0, "files": [p.name for p in images]}
+        print(format_error_images(images, 1.0))
     if json_out:
         write_text_atomic(json_out, json.dumps(report, indent=2))
     return 0
