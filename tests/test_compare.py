@@ -13,9 +13,12 @@ from envstudio.core.latlong import texel_directions
 from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
 from envstudio.io.images import read_image, write_image
 from envstudio.methods.base import Method
+from envstudio.methods.hwconv import method as hwconv_method
 from envstudio.methods.parameters import Parameter
 from envstudio.methods.reference import ReferenceMethod
 from envstudio.render.compare import plan_parameters
+from envstudio.render.hwconv_accuracy import MODES, run_accuracy
+from envstudio.render.session import RenderSession
 from envstudio.render.stopping import (
     NOISE_RULE,
     NOISE_SHARE,
@@ -24,6 +27,7 @@ from envstudio.render.stopping import (
     ReferenceJudge,
     choose_rule,
 )
+from envstudio.scene_setup import build_scene
 
 FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
 
@@ -367,3 +371,49 @@ def test_the_rule_is_strict_when_asked_when_tolerance_is_given_or_nothing_else_i
     assert choose_rule(["mirror"], {}, strict=True) == TOLERANCE_RULE
     assert choose_rule(["mirror"], {"tolerance": 0.01}, strict=False) == TOLERANCE_RULE
     assert choose_rule(["reference"], {}, strict=False) == TOLERANCE_RULE
+
+
+def test_compare_with_hwconv_reports_its_accuracy_against_the_brute_force(
+    small_scene, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.setattr(hwconv_method, "REPORT_DIRECTIONS", 128)
+    monkeypatch.setattr(hwconv_method, "REPORT_FACE", 16)
+    out = tmp_path / "cmp"
+    status = compare(
+        small_scene,
+        out,
+        "--methods",
+        "mirror,hwconv",
+        "--param",
+        "max_samples=64",
+        "--param",
+        "map_size=32",
+    )
+    assert status == 0
+    capsys.readouterr()
+    assert (out / "hwconv.accuracy.error_N20.png").is_file()
+    report = json.loads((out / "compare.json").read_text())
+    assert "extras" not in report["methods"]["mirror"]
+    hwconv = report["methods"]["hwconv"]
+    assert hwconv["parameters"]["phong_exponent"] == 20.0  # the scene's N, not the accuracy's
+    assert hwconv["parameters"]["view"] == "reflector"
+    (extra,) = hwconv["extras"]
+    assert [i["file"] for i in extra["images"]] == ["hwconv.accuracy.error_N20.png"]
+    assert [row[0] for row in extra["rows"]] == ["2-pass (two maps)", "1-pass", "exact"]
+    (row,) = extra["data"]["rows"]
+    assert row["exponent"] == 20.0 and extra["data"]["directions"] == 128
+
+    session = RenderSession(build_scene(str(small_scene), None, None))
+    try:
+        session.method("hwconv").values["map_size"] = 32
+        (expected,) = run_accuracy(session, [20.0], 128, progress=False)["rows"]
+    finally:
+        session.release()
+    for mode in MODES:
+        for key in ("rms", "max", "max_at_d", "map_texels"):
+            assert row[mode][key] == pytest.approx(expected[mode][key], rel=1e-6), (mode, key)
+        assert f"{row[mode]['rms']:.2%}" in {r[1] for r in extra["rows"]}
+    markdown = (out / "compare.md").read_text()
+    assert "## hwconv: accuracy against the brute-force Phong prefilter" in markdown
+    assert "](hwconv.accuracy.error_N20.png)" in markdown
+    assert 'src="hwconv.accuracy.error_N20.png"' in (out / "index.html").read_text()

@@ -397,6 +397,7 @@ def run_compare(args: argparse.Namespace) -> int:
             cache=args.cache,
             strict=args.strict,
             time_limit_s=time_limit,
+            extras_dir=out,
         )
     finally:
         session.release()

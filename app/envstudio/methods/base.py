@@ -14,7 +14,9 @@ what it derives from it on that object's ``revision``.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
 
 import moderngl
 
@@ -23,7 +25,49 @@ from envstudio.gpu.programs import ProgramLibrary
 from envstudio.methods.context import FrameInputs
 from envstudio.methods.parameters import Parameter, ParameterValues
 
+if TYPE_CHECKING:
+    from envstudio.render.session import RenderSession
+
 _REGISTRY: dict[str, type[Method]] = {}
+
+
+@dataclass
+class ReportExtra:
+    """A section a method adds to ``envstudio compare``'s report (:meth:`Method.report_extras`).
+
+    Attributes
+    ----------
+    title : str
+        The section's heading.
+    text : str
+        A sentence or two above the table (plain text).
+    columns : list of str
+        The table's header (empty: no table).
+    rows : list of list of str
+        The table's cells, formatted.
+    data : dict
+        JSON-ready numbers behind the table, as compare.json gives them.
+    images : list of (str, str)
+        (file name in the report's folder, caption) of images the method wrote there.
+    """
+
+    title: str
+    text: str
+    columns: list[str] = field(default_factory=list)
+    rows: list[list[str]] = field(default_factory=list)
+    data: dict = field(default_factory=dict)
+    images: list[tuple[str, str]] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """JSON-ready: the title, text, table, data and image files."""
+        return {
+            "title": self.title,
+            "text": self.text,
+            "columns": list(self.columns),
+            "rows": [list(row) for row in self.rows],
+            "data": self.data,
+            "images": [{"file": f, "caption": c} for f, c in self.images],
+        }
 
 
 class Method(ABC):
@@ -81,6 +125,15 @@ class Method(ABC):
     def progress(self) -> float | None:
         """Fraction done of background work the UI shows as a progress bar (None: none)."""
         return None
+
+    def report_extras(self, session: RenderSession, out_dir: Path) -> list[ReportExtra]:
+        """Sections ``envstudio compare`` adds to its report for this method (none by default).
+
+        Called once after the comparison was measured (its frames, metrics and
+        parameters are kept: the method may change its values), with the session
+        and the report's folder (made), where any image of a section is written.
+        """
+        return []
 
     def release(self) -> None:  # noqa: B027  (optional hook: most methods own nothing extra)
         """Free GPU resources the method owns; safe to call twice."""

@@ -46,7 +46,8 @@ import contextlib
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -55,7 +56,7 @@ from tqdm import tqdm
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
-from envstudio.methods.base import Method, method_class
+from envstudio.methods.base import Method, ReportExtra, method_class
 from envstudio.methods.parameters import parse_assignments
 from envstudio.methods.reference import ConvergenceStatus, ReferenceMethod
 from envstudio.render import reference_cache
@@ -264,6 +265,9 @@ class Comparison:
     reference : ReferenceRun
     results : list of MethodResult
         In the order asked for.
+    extras : dict
+        Method name → the sections it adds to the report (:meth:`Method.report_extras`;
+        only methods that add some).
     """
 
     scene: str
@@ -274,6 +278,7 @@ class Comparison:
     mask: npt.NDArray[np.bool_]
     reference: ReferenceRun
     results: list[MethodResult]
+    extras: dict[str, list[ReportExtra]] = field(default_factory=dict)
 
     @property
     def reliable(self) -> bool:
@@ -340,6 +345,7 @@ def run_comparison(
     cache: bool = False,
     strict: bool = False,
     time_limit_s: float | None = None,
+    extras_dir: Path | None = None,
 ) -> Comparison:
     """Render ``names`` and the reference at the session's camera and compare them.
 
@@ -364,6 +370,10 @@ def run_comparison(
         (render/stopping.py; an explicit ``tolerance`` in ``plan`` does too).
     time_limit_s
         The reference's time limit in seconds (its ``time_limit``; None keeps ``plan``'s).
+    extras_dir
+        The report's folder (made if missing): each compared method's
+        :meth:`Method.report_extras` runs after the measurements and writes its
+        images there. None: no extras.
 
     Raises
     ------
@@ -411,6 +421,7 @@ def run_comparison(
         )
         for name, (method, glossiness, hdr, display) in frames_of.items()
     ]
+    extras = _report_extras(session, list(rendered), extras_dir)
     camera = session.camera
     return Comparison(
         scene=session.scene.name,
@@ -421,7 +432,20 @@ def run_comparison(
         mask=mask,
         reference=ref_run,
         results=results,
+        extras=extras,
     )
+
+
+def _report_extras(
+    session: RenderSession, names: list[str], out_dir: Path | None
+) -> dict[str, list[ReportExtra]]:
+    """Method name → its report sections (those that add some), images written to ``out_dir``."""
+    if out_dir is None:
+        return {}
+    out_dir = Path(out_dir)
+    out_dir.mkdir(exist_ok=True)
+    extras = {name: session.method(name).report_extras(session, out_dir) for name in names}
+    return {name: sections for name, sections in extras.items() if sections}
 
 
 def _render_method(

@@ -10,6 +10,12 @@ Written into one folder, every file atomically::
     compare.md   compare.json            the table
     index.html                           the images side by side with the table (relative links)
 
+A method may add sections (methods.base.ReportExtra, from Method.report_extras,
+e.g. hwconv's accuracy against the brute-force prefilter): each is a heading, a
+sentence, a small table and images it wrote into the folder, rendered after the
+table in compare.md and index.html and given under the method's ``extras`` in the
+JSON (only for methods that add some).
+
 Heat maps colour only the reflector's pixels; the rest shows the reference
 dimmed to grey. In the JSON, PSNR of identical images is the string ``"inf"``
 (JSON has no infinity) and numbers are plain floats; ``reliable`` is false and
@@ -37,6 +43,7 @@ from envstudio.core.colormap import MAGMA_STOPS, magma
 from envstudio.core.env_sampling import LUMINANCE
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import write_image
+from envstudio.methods.base import ReportExtra
 from envstudio.render.compare import STOPPED_BY, Comparison, MethodResult
 from envstudio.render.split_view import SplitSettings
 from envstudio.render.stopping import NOISE_RULE, NOISE_SHARE
@@ -159,7 +166,25 @@ def format_table(comparison: Comparison) -> str:
         "ms/frame: wall clock with a GL finish at both ends; "
         + "; ".join(sorted({f"{r.name}: {r.timing}" for r in comparison.results})),
     ]
+    for name, sections in comparison.extras.items():
+        for extra in sections:
+            lines += ["", *_extra_markdown(name, extra)]
     return "\n".join(lines)
+
+
+def _extra_markdown(name: str, extra: ReportExtra) -> list[str]:
+    """A method's report section as Markdown lines: heading, text, table, image links."""
+    lines = [f"## {name}: {extra.title}", "", extra.text]
+    if extra.columns:
+        lines += [
+            "",
+            f"| {' | '.join(extra.columns)} |",
+            "|:--|" + "--:|" * (len(extra.columns) - 1),
+            *(f"| {' | '.join(row)} |" for row in extra.rows),
+        ]
+    for file, caption in extra.images:
+        lines += ["", f"![{caption}]({file})"]
+    return lines
 
 
 def to_json(comparison: Comparison) -> dict:
@@ -204,6 +229,11 @@ def to_json(comparison: Comparison) -> dict:
                 "frame_ms": r.frame_ms,
                 "timing": r.timing,
                 "files": _files(r.name),
+                **(
+                    {"extras": [e.to_json() for e in comparison.extras[r.name]]}
+                    if r.name in comparison.extras
+                    else {}
+                ),
             }
             for r in comparison.results
         },
@@ -247,6 +277,7 @@ td.n {{ text-align: right; font-variant-numeric: tabular-nums; }}
 .row {{ display: flex; flex-wrap: wrap; gap: 1em; margin-bottom: 1em; }}
 figure {{ margin: 0; }}
 figure img {{ width: {max(w, 256)}px; image-rendering: pixelated; display: block; }}
+figure img.extra {{ width: auto; image-rendering: auto; }}
 figcaption {{ font-size: 12px; color: #aaa; }}
 .legend {{ display: flex; align-items: center; gap: 0.5em; margin-bottom: 1em; }}
 .scale {{ width: 256px; height: 12px; background: linear-gradient(to right, {gradient}); }}
@@ -261,6 +292,7 @@ figcaption {{ font-size: 12px; color: #aaa; }}
 relative luminance error of the linear frames over [0, {HEAT_SCALE:g}]; grey: not measured.</p>
 <div class="legend"><span>0</span><div class="scale"></div><span>top of scale</span></div>
 {"".join(f'<div class="row">{row}</div>' for row in rows)}
+{_html_extras(comparison)}
 </body>
 </html>
 """
@@ -286,6 +318,40 @@ def _html_table(comparison: Comparison) -> str:
         for c in ("method", "PSNR (dB)", "SSIM", "FLIP", "ms/frame", "reliable", "matched")
     )
     return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+def _html_extras(comparison: Comparison) -> str:
+    """The methods' report sections: a heading, the text, the table, the images."""
+    esc = html.escape
+    parts = []
+    for name, sections in comparison.extras.items():
+        for extra in sections:
+            parts.append(f"<h2>{esc(name)}: {esc(extra.title)}</h2>\n<p>{esc(extra.text)}</p>")
+            if extra.columns:
+                head = "".join(f"<th>{esc(c)}</th>" for c in extra.columns)
+                body = "".join(
+                    "<tr>"
+                    + "".join(
+                        f"<td>{esc(c)}</td>" if k == 0 else f'<td class="n">{esc(c)}</td>'
+                        for k, c in enumerate(row)
+                    )
+                    + "</tr>"
+                    for row in extra.rows
+                )
+                parts.append(f"<table><tr>{head}</tr>{body}</table>")
+            if extra.images:
+                cards = "".join(_extra_image(file, caption) for file, caption in extra.images)
+                parts.append(f'<div class="row">{cards}</div>')
+    return "\n".join(parts)
+
+
+def _extra_image(image: str, caption: str) -> str:
+    """An image of a method's section at its own size (not the frames' width)."""
+    esc = html.escape
+    return (
+        f'<figure><img class="extra" src="{esc(image)}" alt="{esc(caption)}">'
+        f"<figcaption>{esc(caption)}</figcaption></figure>"
+    )
 
 
 def _card(title: str, image: str, caption: str) -> str:

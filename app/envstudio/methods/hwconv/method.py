@@ -17,16 +17,24 @@ then the reflector reads the result along the reflection vector and combines it
 with a diffuse term by seed 000 eq. 8 (shaders/hwconv/hwconv.glsl). N and ε only
 change the kernel weights, uniforms of one compiled program: no recompile.
 ``view`` shows S, L, the blended map or the source as the frame instead.
+
+In ``envstudio compare``'s report (:meth:`HwConvMethod.report_extras`) the method
+adds its accuracy against the brute-force Phong prefilter at the compared N
+(render/hwconv_accuracy.py at a cheap setting: :data:`REPORT_DIRECTIONS`
+directions, error image faces of :data:`REPORT_FACE` texels), a table and the
+error image.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import moderngl
 
 from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method, register
+from envstudio.methods.base import Method, ReportExtra, register
 from envstudio.methods.context import FrameInputs
 from envstudio.methods.hwconv.convolution import FaceMaps, ParaboloidConvolution
 from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, plan_filters
@@ -37,6 +45,10 @@ from envstudio.methods.parameters import Parameter
 VIEWS = ("reflector", "blended", "small", "large", "exact")
 #: Choices of ``kernel``: the paper's two shift-invariant maps, or the exact shift-variant one.
 KERNELS = ("two_maps", "exact")
+#: Lookup directions of the accuracy compare's report adds (a few seconds).
+REPORT_DIRECTIONS = 2048
+#: Texels across each face's disc in the error image compare's report adds.
+REPORT_FACE = 128
 
 
 @register
@@ -236,6 +248,76 @@ class HwConvMethod(Method):
             self.ctx.disable(moderngl.DEPTH_TEST)
             self._quad.draw(program)
             self.ctx.enable(moderngl.DEPTH_TEST)
+
+    def report_extras(self, session, out_dir: Path) -> list[ReportExtra]:
+        """compare's section: the accuracy against the brute force at the compared N.
+
+        render/hwconv_accuracy.run_accuracy with this method's map values at
+        :data:`REPORT_DIRECTIONS` directions: RMS and max relative error of the
+        2-pass, 1-pass and exact modes, and ``hwconv.accuracy.error_N<N>.png`` in
+        ``out_dir`` (write_error_images, scale 1). The values are restored after.
+        A scene with local objects gets a note instead (the brute force sees only
+        the environment).
+        """
+        from envstudio.render.hwconv_accuracy import MODES, run_accuracy, write_error_images
+
+        title = "accuracy against the brute-force Phong prefilter"
+        exponent = float(self.values["phong_exponent"])
+        if session.scene.local_objects():
+            return [
+                ReportExtra(
+                    title,
+                    f"not measured: scene {session.scene.name} has local objects and the "
+                    "brute force filters the environment alone",
+                )
+            ]
+        saved = self.values.as_dict()
+        errors: dict = {}
+        try:
+            report = run_accuracy(
+                session, [exponent], REPORT_DIRECTIONS, progress=False, errors=errors
+            )
+        finally:
+            self.values.update(saved)
+        images = write_error_images(
+            report, errors, Path(out_dir) / "hwconv.accuracy.json", scale=1.0, face=REPORT_FACE
+        )
+        row = report["rows"][0]
+        m = report["map"]
+        labels = {"two_pass": "2-pass (two maps)", "one_pass": "1-pass", "exact": "exact"}
+        text = (
+            f"N = {exponent:g}, {report['environment']} ({report['source']}), map "
+            f"{m['size']} + 2·{m['border']} from a {m['cube']}² cube, ε = {m['epsilon']:g}, "
+            f"maximum kernel {m['max_kernel']}, {report['directions']} directions over the "
+            "sphere: relative error per RGB channel (d of the max: 0 the face's centre, 1 the "
+            f"rim); brute force {row['brute_s']:.1f} s"
+        )
+        return [
+            ReportExtra(
+                title,
+                text,
+                columns=["mode", "RMS", "max", "d of max", "map texels read"],
+                rows=[
+                    [
+                        labels[mode],
+                        f"{row[mode]['rms']:.2%}",
+                        f"{row[mode]['max']:.1%}",
+                        f"{row[mode]['max_at_d']:.2f}",
+                        str(row[mode]["map_texels"]),
+                    ]
+                    for mode in MODES
+                ],
+                data=report,
+                images=[
+                    (
+                        path.name,
+                        f"N = {exponent:g}: relative error (magma over 0–100 %, saturating "
+                        "above), rows 2-pass, 1-pass, exact; front | back face",
+                    )
+                    for path in images
+                ],
+            )
+        ]
 
     def release(self) -> None:
         """Free the maps and vertex arrays; safe to call twice."""
