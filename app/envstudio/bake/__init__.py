@@ -1,1 +1,4 @@
-"""Offline work, GL-free where it can be: bake.rsibr (seed 002's radiance sphere maps)."""
+"""Offline work, GL-free where it can be.
+
+bake.rsibr: seed 002's radiance sphere maps; bake.pem: seed 003's segmented ray tracer.
+"""
