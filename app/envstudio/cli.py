@@ -1,4 +1,4 @@
-"""The ``envstudio`` command: view (default), render, methods, bench, sh, figure, …
+"""The ``envstudio`` command: view (default), render, methods, bench, sh, figure, doctor, …
 
 Usage errors print one line and exit with status 2; nothing prints a traceback
 for bad input.
@@ -49,8 +49,15 @@ def _add_time_limit_option(parser: argparse.ArgumentParser, what: str) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
+    from envstudio import __version__
+
     parser = _Parser(prog="envstudio", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    sub.add_parser(
+        "doctor",
+        help="what this machine has (GL, EGL, window, packages, folders) and what is missing",
+    )
 
     view = sub.add_parser("view", help="open the viewer window (the default)")
     _add_scene_options(view)
@@ -360,6 +367,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         command = args.command or "view"
         if args.command is None:
             args = build_parser().parse_args(["view", *(argv or sys.argv[1:])])
+        if command == "doctor":  # before the commands' imports, which may be what is missing
+            from envstudio.doctor import run_doctor
+
+            return run_doctor()
         from envstudio import commands
 
         return getattr(commands, f"run_{command.replace('-', '_')}")(args) or 0

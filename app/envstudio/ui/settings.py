@@ -20,10 +20,15 @@ from envstudio.io.atomic import write_text_atomic
 APP_NAME = "envmap-studio"
 
 
+def config_location() -> Path:
+    """Folder of the settings file, not created (``envstudio doctor`` reports it)."""
+    override = os.environ.get("ENVSTUDIO_CONFIG_DIR")
+    return Path(override) if override else Path(platformdirs.user_config_dir(APP_NAME))
+
+
 def config_dir() -> Path:
     """Folder of the settings file (created if missing)."""
-    override = os.environ.get("ENVSTUDIO_CONFIG_DIR")
-    folder = Path(override) if override else Path(platformdirs.user_config_dir(APP_NAME))
+    folder = config_location()
     folder.mkdir(parents=True, exist_ok=True)
     return folder
 
