@@ -107,6 +107,18 @@ class TracedView:
         reflector.
     seconds : float
         Wall time of the trace.
+    ray_pixel : (k,) int64, optional
+        For each of the k samples that hit a reflector, its pixel row·R + column.
+    ray_part : (k,) int64, optional
+        The part each such sample hit.
+    ray_point : (k, 3) float32, optional
+        Its hit point (world space, offset along the normal as the tracer
+        continues the ray from it).
+    ray_normal : (k, 3) float32, optional
+        Its unit shading normal, turned towards the viewer.
+    ray_direction : (k, 3) float32, optional
+        Its unit reflection direction r = reflect(−v, n): what EM inference
+        intersects with the EM geometry (seed 003 §4, "EM Representations").
     """
 
     camera: OrbitCamera
@@ -122,6 +134,11 @@ class TracedView:
     local_rgb: npt.NDArray[np.float32]
     local_alpha: npt.NDArray[np.float32]
     seconds: float = 0.0
+    ray_pixel: npt.NDArray[np.int64] | None = None
+    ray_part: npt.NDArray[np.int64] | None = None
+    ray_point: npt.NDArray[np.float32] | None = None
+    ray_normal: npt.NDArray[np.float32] | None = None
+    ray_direction: npt.NDArray[np.float32] | None = None
 
     def incident(self) -> npt.NDArray[np.float64]:
         """(P, R, R, 3) incident specular layer α_L·L + (1 − α_L)·D (local over distant)."""
@@ -368,7 +385,7 @@ class SceneTracer:
 
         # reflector samples: Figure 4's layers
         ri = np.flatnonzero(refl)
-        p, _, r, fresnel, diffuse = self._reflector_terms(
+        p, nrm, r, fresnel, diffuse = self._reflector_terms(
             tri[ri], t[ri], u[ri], v[ri], origins[ri], dirs[ri]
         )
         hit2 = self._intersect(False, p, r)
@@ -421,6 +438,11 @@ class SceneTracer:
             local_rgb=(acc(incident * is_local[:, None]) / local_safe).astype(np.float32),
             local_alpha=(local_count / safe).astype(np.float32),
             seconds=time.perf_counter() - start,
+            ray_pixel=pix[ri],
+            ray_part=part[ri],
+            ray_point=p.astype(np.float32),
+            ray_normal=nrm.astype(np.float32),
+            ray_direction=r.astype(np.float32),
         )
 
 
