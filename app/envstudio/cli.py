@@ -271,20 +271,35 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _add_bake_parser(sub) -> None:
-    bake = sub.add_parser("bake", help="offline bakes: rsibr radiance sphere maps (seed 002)")
-    bake.add_argument("kind", choices=("rsibr",), help="what to bake")
-    bake.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
-    bake.add_argument("--brdf", default="phong", help="phong, lambertian or carpaint")
+    bake = sub.add_parser(
+        "bake",
+        help="offline bakes: rsibr radiance sphere maps (seed 002), pem per-view EMs (seed 003)",
+    )
+    bake.add_argument("kind", choices=("rsibr", "pem"), help="what to bake")
+    bake.add_argument("--env", help="rsibr: lat-long environment (.exr or .hdr), required")
+    bake.add_argument("--scene", help="pem: shipped scene name (room) or a TOML scene file")
+    bake.add_argument("--brdf", default="phong", help="rsibr: phong, lambertian or carpaint")
     _add_param_option(bake)
-    bake.add_argument("--size", type=int, default=64, help="map edge in texels (default 64)")
-    bake.add_argument("--views", type=int, default=12, help="12 (icosahedron) or 42 views")
     bake.add_argument(
-        "--samples", type=int, default=256, help="GPU importance samples per lobe (default 256)"
+        "--size", type=int, help="rsibr: map edge in texels (64); pem: trace resolution R (256)"
+    )
+    bake.add_argument(
+        "--views", type=int, help="rsibr: 12 (icosahedron) or 42; pem: views on the arc (100)"
+    )
+    bake.add_argument("--step", type=float, help="pem: degrees between views (default 1)")
+    bake.add_argument(
+        "--samples",
+        type=int,
+        help="rsibr: GPU importance samples per lobe (256); pem: rays per pixel (4)",
+    )
+    bake.add_argument("--em-size", type=int, help="pem: cube face edge of the EMs (default 64)")
+    bake.add_argument(
+        "--workers", type=int, help="pem: local processes (default one per core; 0 in-process)"
     )
     bake.add_argument(
         "--device", choices=("auto", "gpu", "cpu"), default="auto", help="auto: GPU, else CPU"
     )
-    bake.add_argument("-o", "--output", required=True, help="FILE.rsibr")
+    bake.add_argument("-o", "--output", required=True, help="FILE.rsibr or FILE.pem")
 
 
 def _add_prefilter_parser(sub) -> None:

@@ -358,9 +358,18 @@ def run_prefilter(args: argparse.Namespace) -> int:
 
 
 def run_bake(args: argparse.Namespace) -> int:
-    """``envstudio bake rsibr``: seed 002's radiance sphere maps to a .rsibr file."""
+    """``envstudio bake rsibr`` (seed 002, .rsibr) or ``bake pem`` (seed 003, .pem)."""
+    if args.kind == "pem":
+        from envstudio.render.pem_command import run_bake_pem
+
+        return run_bake_pem(args)
     from envstudio.render.rsibr_command import run_bake_rsibr
 
+    for name, value in (("size", 64), ("views", 12), ("samples", 256)):
+        if getattr(args, name) is None:
+            setattr(args, name, value)
+    if args.env is None:
+        raise ParameterError("bake rsibr: --env is required (a lat-long .exr or .hdr)")
     return run_bake_rsibr(args)
 
 

@@ -1,0 +1,93 @@
+"""``envstudio bake pem``: seed 003's per-view environment maps baked to a ``.pem`` file.
+
+Bad input (a view count below 1, a non-positive step, views that would coincide,
+a size out of range, an unknown scene, a scene without a reflector, a missing
+output folder) is refused with one line before any tracing. Views are baked on a
+local process pool and saved one by one to ``OUT.pem.parts/``; a rerun resumes
+from there, and ``OUT.pem`` is written atomically only when every view is done
+(bake/pem/bake.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from tqdm import tqdm
+
+from envstudio.bake.pem.bake import parts_folder, run_bake
+from envstudio.bake.pem.views import arc_views
+from envstudio.errors import ParameterError
+from envstudio.io.atomic import check_output_path
+from envstudio.io.scene_file import resolve_scene
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = ["DEFAULTS", "run_bake_pem"]
+
+#: Defaults of the options ``bake pem`` shares with ``bake rsibr`` (seed 003 §6:
+#: 100 views at 1°).
+DEFAULTS = {"views": 100, "step": 1.0, "size": 256, "samples": 4, "em_size": 64, "workers": None}
+
+
+def _check(args: argparse.Namespace) -> None:
+    if args.env is not None:
+        raise ParameterError("bake pem: --env is not used (the scene's environment is baked)")
+    if args.views < 1:
+        raise ParameterError(f"--views {args.views}: expected a view count ≥ 1")
+    if not (math.isfinite(args.step) and args.step > 0):
+        raise ParameterError(f"--step {args.step:g}: expected a positive number of degrees")
+    if not 8 <= args.size <= 4096:
+        raise ParameterError(f"--size {args.size}: expected a trace resolution in [8, 4096]")
+    if not 1 <= args.samples <= 1024:
+        raise ParameterError(f"--samples {args.samples}: expected rays per pixel in [1, 1024]")
+    if not 2 <= args.em_size <= 1024:
+        raise ParameterError(f"--em-size {args.em_size}: expected a cube face edge in [2, 1024]")
+    if args.workers is not None and args.workers < 0:
+        raise ParameterError(f"--workers {args.workers}: expected 0 (in-process) or more")
+
+
+def run_bake_pem(args: argparse.Namespace) -> int:
+    """Check the arguments, bake with a progress bar, write the file, print one line."""
+    for name, value in DEFAULTS.items():
+        if getattr(args, name, None) is None:
+            setattr(args, name, value)
+    _check(args)
+    if args.scene is None:
+        raise ParameterError("bake pem: --scene is required (a shipped name or a TOML file)")
+    out = check_output_path(args.output)
+    resolve_scene(args.scene)
+    try:
+        arc_views(OrbitCamera(), args.views, args.step)  # views that coincide, before work
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
+    with tqdm(unit="view", desc="pem", leave=False) as bar:
+        try:
+            report = run_bake(
+                args.scene,
+                lambda camera: arc_views(camera, args.views, args.step),
+                out,
+                size=args.size,
+                samples=args.samples,
+                em_size=args.em_size,
+                workers=args.workers,
+                bar=bar,
+            )
+        except ValueError as exc:  # a scene without a reflector
+            raise ParameterError(str(exc)) from None
+        except KeyboardInterrupt:
+            folder = parts_folder(out)
+            saved = len(list(folder.glob("view-*.npz"))) if folder.is_dir() else 0
+            bar.write(
+                f"envstudio: {out}: not written; {saved} of {args.views} views saved in "
+                f"{folder}/, the same command resumes",
+                file=sys.stderr,
+            )
+            raise
+    bake = report.bake
+    resumed = f", {len(report.reused)} resumed" if report.reused else ""
+    print(
+        f"{out}: {bake.views} views × {len(bake.parts)} parts of {bake.em_size}² box EMs "
+        f"({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s"
+    )
+    return 0
