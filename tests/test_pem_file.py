@@ -139,13 +139,31 @@ def test_parts_of_another_bake_are_not_reused(tmp_path):
     assert report.reused == [] and report.baked == [0, 1]
 
 
-def test_cli_bakes_on_a_pool(tmp_path, capsys):
+@pytest.mark.parametrize("runner", [["--workers", "2"], ["--dask"]])
+def test_cli_bakes_on_a_pool(tmp_path, capsys, runner):
+    if runner == ["--dask"]:
+        pytest.importorskip("distributed")
     out = tmp_path / "cli.pem"
     argv = ["bake", "pem", "--scene", "room", "--views", "2", "--step", "5", "--size", "32"]
-    argv += ["--samples", "2", "--em-size", "4", "--workers", "2", "-o", str(out)]
+    argv += ["--samples", "2", "--em-size", "4", *runner, "-o", str(out)]
     assert main(argv) == 0
     assert "2 views × 2 parts" in capsys.readouterr().out
     assert load_pem(out).views == 2
+
+
+def test_local_dask_cluster_bakes_the_same_file(baked, tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "dask.pem"
+    report = run_bake("room", _arc(2), out, scheduler="local", **TINY)
+    assert sorted(report.baked) == [0, 1] and not parts_folder(out).exists()
+    checksums = []
+    for path in (baked[0], out):
+        with np.load(path) as data:
+            checksums.append(json.loads(str(data["header"]))["checksum"])
+    assert checksums[0] == checksums[1]
+    pool, dask = load_pem(baked[0]), load_pem(out)
+    for name in ("distant", "seen", "psnr", "iterations"):
+        np.testing.assert_array_equal(getattr(dask, name), getattr(pool, name))
 
 
 @pytest.mark.parametrize(

@@ -296,6 +296,19 @@ def _add_bake_parser(sub) -> None:
     bake.add_argument(
         "--workers", type=int, help="pem: local processes (default one per core; 0 in-process)"
     )
+    cluster = bake.add_mutually_exclusive_group()
+    cluster.add_argument(
+        "--dask",
+        dest="scheduler",
+        action="store_const",
+        const="local",
+        help="pem: bake on a local Dask cluster (2 worker processes) instead of the pool",
+    )
+    cluster.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="pem: bake on the Dask scheduler at ADDRESS (tcp://host:8786), or 'local'",
+    )
     bake.add_argument(
         "--device", choices=("auto", "gpu", "cpu"), default="auto", help="auto: GPU, else CPU"
     )

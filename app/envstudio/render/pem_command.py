@@ -72,6 +72,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 em_size=args.em_size,
                 workers=args.workers,
                 bar=bar,
+                scheduler=getattr(args, "scheduler", None),
             )
         except ValueError as exc:  # a scene without a reflector
             raise ParameterError(str(exc)) from None

@@ -5,7 +5,8 @@ every sample of the parameter space, so a view is the work unit:
 :func:`bake_view` takes a picklable :class:`ViewTask` and returns plain arrays
 (it builds and caches the scene's tracer in its own process), so the same unit
 runs in-process, on a local process pool (:func:`run_bake`, concurrent.futures)
-or, later, on a Dask cluster.
+or on a Dask cluster (``scheduler``: a scheduler address, or ``"local"`` for a
+``dask.distributed.LocalCluster`` of two worker processes; the ``cluster`` extra).
 
 Resume: every finished view is written atomically to ``OUT.pem.parts/view-NNNNN.npz``
 (its arrays, a checksum, and the key of the bake it belongs to: scene file,
@@ -247,6 +248,37 @@ def _map_local(tasks, workers: int):
     pool.shutdown(wait=True)
 
 
+def _map_dask(tasks, scheduler: str):
+    """Yield (task, result) as views finish on a Dask cluster (``"local"``: a LocalCluster)."""
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:  # pragma: no cover - the cluster extra is in the lock
+        raise ValueError(
+            "a Dask bake needs dask and distributed: pip install 'envmap-studio[cluster]'"
+        ) from None
+    cluster = None
+    if scheduler == "local":
+        # worker processes start with spawn (distributed's default): no fork after Embree
+        cluster = LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        futures = {client.submit(bake_view, t, pure=False): t for t in tasks}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def run_bake(
     scene: str | os.PathLike,
     views: ViewSpace | Callable[[OrbitCamera], ViewSpace],
@@ -259,6 +291,7 @@ def run_bake(
     workers: int | None = None,
     on_view: Callable[[int, dict], None] | None = None,
     bar=None,
+    scheduler: str | None = None,
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -280,6 +313,11 @@ def run_bake(
         Called with (index, result) after each view's part is saved.
     bar
         A tqdm bar over views (``total`` and ``initial`` are set here).
+    scheduler
+        Bake on a Dask cluster instead of the local pool (``workers`` is then
+        ignored): a scheduler address (``tcp://host:8786``), or ``"local"`` to start
+        a ``LocalCluster`` (two worker processes, one thread each) and close it
+        after. One future per unfinished view; parts are saved as they complete.
 
     Returns
     -------
@@ -333,7 +371,11 @@ def run_bake(
         bar.total, bar.initial, bar.n = len(tasks), len(results), len(results)
         bar.refresh()
     count = min(os.cpu_count() or 1, len(todo)) if workers is None else int(workers)
-    for task, result in _map_local(todo, max(0, min(count, len(todo)))):
+    if scheduler is not None and todo:
+        finished = _map_dask(todo, scheduler)
+    else:
+        finished = _map_local(todo, max(0, min(count, len(todo))))
+    for task, result in finished:
         _save_part(folder / f"view-{task.index:05d}.npz", key, task, result)
         results[task.index] = {k: result[k] for k in _PART_KEYS}
         report.baked.append(task.index)
