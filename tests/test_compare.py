@@ -309,7 +309,9 @@ def test_strict_with_a_time_limit_that_ends_first_is_a_note_and_not_converged(
         False,
     )
     assert ref["parameters"]["time_limit"] == 1.5
-    assert 1.5 <= ref["wall_s"] < 1.5 + 1.5, "stops at about the limit"
+    # at the limit, not long after (the tolerance is out of reach): one batch plus a
+    # loaded machine's slack, far below where an unstopped run would end
+    assert 1.5 <= ref["wall_s"] < 1.5 + 6.0, "stops at about the limit"
     notes = [line for line in err.splitlines() if line.startswith("envstudio: note:")]
     assert len(notes) == 1
     assert "time limit (1.5 s) ended before the tolerance (0.001 %)" in notes[0]
