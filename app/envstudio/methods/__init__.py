@@ -8,3 +8,6 @@ from envstudio.methods.banks import method as _banks  # noqa: F401  (after hwcon
 
 # isort: split
 from envstudio.methods.rsibr import method as _rsibr  # noqa: F401  (seed 002)
+
+# isort: split
+from envstudio.methods.pem import method as _pem  # noqa: F401  (seed 003)

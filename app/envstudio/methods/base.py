@@ -22,11 +22,12 @@ import moderngl
 
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.methods.context import FrameInputs
+from envstudio.methods.context import FrameInputs, GpuScene
 from envstudio.methods.parameters import Parameter, ParameterValues
 
 if TYPE_CHECKING:
     from envstudio.render.session import RenderSession
+    from envstudio.scene.camera import OrbitCamera
 
 _REGISTRY: dict[str, type[Method]] = {}
 
@@ -105,6 +106,17 @@ class Method(ABC):
     @abstractmethod
     def render(self, frame: FrameInputs) -> None:
         """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
+
+    def prepare(self, scene: GpuScene) -> None:  # noqa: B027  (optional hook)
+        """Load what the method needs before its first frame on ``scene`` (files, bakes).
+
+        The viewer calls it when the method is picked and keeps the previous
+        method on a :class:`~envstudio.errors.UserError`; :meth:`render` calls it
+        too. Most methods need nothing.
+        """
+
+    def steer_camera(self, camera: OrbitCamera) -> None:  # noqa: B027  (optional hook)
+        """Move the camera before a frame (``pem`` snaps it to its baked path); most do not."""
 
     def finished(self) -> bool:
         """True when another frame would not change the image (progressive methods: converged)."""

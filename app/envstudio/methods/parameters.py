@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 
 from envstudio.errors import ParameterError
 
-KINDS = ("float", "int", "bool", "choice")
+KINDS = ("float", "int", "bool", "choice", "path")
 
 
 @dataclass(frozen=True)
@@ -25,7 +25,8 @@ class Parameter:
     name : str
         Identifier used by ``--param`` and as the GLSL uniform ``u_<name>``.
     kind : str
-        ``float``, ``int``, ``bool`` or ``choice``.
+        ``float``, ``int``, ``bool``, ``choice`` or ``path`` (a file name; the
+        method checks the file when it uses it).
     default : float | int | bool | str
         Value a fresh method starts with.
     minimum, maximum : float or None
@@ -35,7 +36,8 @@ class Parameter:
     help : str
         One sentence for tooltips and ``envstudio methods``.
     choices : tuple of str
-        Allowed values of a ``choice``.
+        Allowed values of a ``choice``; of a ``path``, the file suffixes its
+        dialog offers.
     log : bool
         Logarithmic slider (exponents).
     rebuild : bool
@@ -69,6 +71,10 @@ class Parameter:
             if text in ("0", "false", "off", "no"):
                 return False
             raise ParameterError(f"{self.name}={value}: expected true or false")
+        if self.kind == "path":
+            if not isinstance(value, (str, bytes)) and not hasattr(value, "__fspath__"):
+                raise ParameterError(f"{self.name}={value!r}: expected a file name")
+            return str(value)
         if self.kind == "choice":
             if str(value) not in self.choices:
                 raise ParameterError(

@@ -78,6 +78,7 @@ class FrameRenderer:
         self, scene: GpuScene, method: Method, camera: OrbitCamera, size: tuple[int, int]
     ) -> None:
         """Render background, local objects and the method's reflectors into the HDR target."""
+        method.steer_camera(camera)
         self._ensure_target(size)
         fbo = self._fbo
         fbo.use()

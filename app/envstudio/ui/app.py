@@ -367,6 +367,11 @@ class Viewer(WindowConfig):
         """Show method ``name`` (with the look of the previous one when matching is on)."""
         previous = self.method(self.method_name)
         chosen = self.method(name)
+        try:
+            chosen.prepare(self.session.gpu_scene)
+        except UserError as exc:  # e.g. a bake for another scene: keep the method on show
+            self.status.error(f"{name}: {exc}")
+            return
         if self.compare.match and chosen is not previous:
             self.compare.match_note = match_glossiness(
                 chosen, previous, self.session.gpu_scene.cube_size

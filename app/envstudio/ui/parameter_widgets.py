@@ -10,6 +10,8 @@ declaration validates it::
             (drag_int without a range)
     bool    checkbox
     choice  combo of ``choices``
+    path    a text field (applied on Enter) and an "Open..." button for a native
+            file dialog offering the suffixes in ``choices``
 
 The unit and help text form the tooltip. A number typed past its range
 (Ctrl+click on a slider) is clamped to it and the clamp is noted in the status line.
@@ -19,9 +21,13 @@ from __future__ import annotations
 
 from imgui_bundle import imgui
 
-from envstudio.errors import ParameterError
+from envstudio.errors import UserError
 from envstudio.methods.parameters import Parameter, ParameterValues
+from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.status import StatusLine
+
+_PATH_DIALOGS: dict[str, OpenFileDialog] = {}
+"""One open-file dialog per ``path`` parameter name, polled every frame."""
 
 _CLAMP = imgui.SliderFlags_.none
 """Sliders do not clamp typed values themselves, so that a clamp can be noted."""
@@ -90,6 +96,8 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> str | None:
         changed, value = imgui.drag_int(label, int(current))
     elif param.kind == "bool":
         changed, value = imgui.checkbox(label, bool(current))
+    elif param.kind == "path":
+        changed, value = _path_widget(param, str(current))
     else:
         index = param.choices.index(current)
         changed, index = imgui.combo(label, index, list(param.choices))
@@ -104,6 +112,24 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> str | None:
     return note
 
 
+def _path_widget(param: Parameter, current: str) -> tuple[bool, str]:
+    """A file name field (applied on Enter) and an "Open..." button; (changed, value)."""
+    dialog = _PATH_DIALOGS.setdefault(
+        param.name, OpenFileDialog(f"Open {param.name}", param.name, param.choices or ("",))
+    )
+    imgui.push_id(param.name)
+    if imgui.button("Open..."):
+        dialog.open()  # NoFileDialogError reaches parameter_widgets' status line
+    imgui.same_line()
+    imgui.set_next_item_width(-1.0)
+    changed, value = imgui.input_text("##path", current, imgui.InputTextFlags_.enter_returns_true)
+    imgui.pop_id()
+    chosen = dialog.poll()
+    if chosen is not None:
+        return True, str(chosen)
+    return changed, value
+
+
 def parameter_widgets(values: ParameterValues, status: StatusLine) -> None:
     """Draw a widget per declared parameter; a clamp is noted, a rejected value is an error."""
     for param in values:
@@ -111,5 +137,5 @@ def parameter_widgets(values: ParameterValues, status: StatusLine) -> None:
             note = parameter_widget(values, param)
             if note:
                 status.note(note)
-        except ParameterError as exc:
+        except UserError as exc:  # a rejected value, or no file dialog program
             status.error(str(exc))

@@ -1,0 +1,131 @@
+"""Blending between the sampled views of a PEM (seed 003 §4, "run-time").
+
+The current camera is mapped into the bake's parameter space: its azimuth (and
+elevation on a 2D grid) about the bake's target. The nearest two samples of an
+arc (four of a grid) are blended with linear (bilinear) weights, so the image
+changes continuously as the camera moves; beyond the ends of an arc that does
+not close, the end sample takes the whole weight (still continuous). Unblended
+playback (seed 003 §6's table) takes the nearest sample alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ["ViewBlend", "axis_weights", "camera_angles", "view_blend"]
+
+
+@dataclass(frozen=True)
+class ViewBlend:
+    """The samples a frame blends and their weights.
+
+    Attributes
+    ----------
+    views : tuple of int
+        View indices into the bake's views (elevation-major), 1, 2 or 4 of them.
+    weights : tuple of float
+        Their weights, each in [0, 1], summing to 1.
+    position : tuple of float
+        The camera's place along the axes in view-index units (azimuth, elevation).
+    """
+
+    views: tuple[int, ...]
+    weights: tuple[float, ...]
+    position: tuple[float, float]
+
+
+def camera_angles(position: npt.ArrayLike, target: npt.ArrayLike) -> tuple[float, float]:
+    """Azimuth and elevation (degrees, OrbitCamera's convention) of an eye about a target.
+
+    Parameters
+    ----------
+    position, target
+        (3,) world-space eye and the bake's target.
+
+    Returns
+    -------
+    azimuth, elevation : float
+        Azimuth in (−180, 180], 0 on +Z, 90 on +X; elevation in [−90, 90].
+    """
+    d = np.asarray(position, dtype=np.float64) - np.asarray(target, dtype=np.float64)
+    azimuth = float(np.degrees(np.arctan2(d[0], d[2])))
+    elevation = float(np.degrees(np.arctan2(d[1], np.hypot(d[0], d[2]))))
+    return azimuth, elevation
+
+
+def _unwrap_near(angle: float, samples: npt.NDArray[np.float64]) -> float:
+    """``angle`` plus the multiple of 360° that puts it nearest the samples' middle."""
+    middle = 0.5 * (samples[0] + samples[-1])
+    return float(angle + 360.0 * np.round((middle - angle) / 360.0))
+
+
+def axis_weights(samples: npt.ArrayLike, value: float, periodic: bool = False) -> tuple:
+    """Position of ``value`` along increasing ``samples`` as two indices and weights.
+
+    Parameters
+    ----------
+    samples
+        (n,) increasing sample coordinates (degrees).
+    value
+        The coordinate to place.
+    periodic
+        Angles: ``value`` is first moved by a multiple of 360° next to the samples.
+
+    Returns
+    -------
+    (i0, i1, w1, u)
+        Samples i0 ≤ i1 = min(i0 + 1, n − 1), weight w1 of i1 (1 − w1 of i0), and the
+        fractional index u in [0, n − 1] (clamped at the ends).
+    """
+    s = np.asarray(samples, dtype=np.float64).reshape(-1)
+    if periodic:
+        value = _unwrap_near(value, s)
+    if len(s) == 1:
+        return 0, 0, 0.0, 0.0
+    u = float(np.interp(value, s, np.arange(len(s), dtype=np.float64)))
+    i0 = min(int(np.floor(u)), len(s) - 2)
+    return i0, i0 + 1, u - i0, u
+
+
+def view_blend(view_space: dict, position: npt.ArrayLike, blend: bool = True) -> ViewBlend:
+    """The views and weights for a camera at ``position`` (seed 003 §4, "run-time").
+
+    Parameters
+    ----------
+    view_space
+        ``ViewSpace.describe()`` of the bake (kind, azimuths, elevations, target).
+    position
+        (3,) camera eye, world space.
+    blend
+        False: the nearest sample alone (the paper's unblended playback).
+
+    Returns
+    -------
+    ViewBlend
+    """
+    azimuths = np.asarray(view_space["azimuths"], dtype=np.float64)
+    elevations = np.asarray(view_space["elevations"], dtype=np.float64)
+    azimuth, elevation = camera_angles(position, view_space["target"])
+    a0, a1, wa, ua = axis_weights(azimuths, azimuth, periodic=True)
+    if view_space["kind"] == "grid" and len(elevations) > 1:
+        e0, e1, we, ue = axis_weights(elevations, elevation)
+    else:
+        e0, e1, we, ue = 0, 0, 0.0, 0.0
+    count = len(azimuths)
+    corners = [
+        (e0 * count + a0, (1 - we) * (1 - wa)),
+        (e0 * count + a1, (1 - we) * wa),
+        (e1 * count + a0, we * (1 - wa)),
+        (e1 * count + a1, we * wa),
+    ]
+    if not blend:
+        nearest = (round(ue) * count + round(ua),)
+        return ViewBlend(nearest, (1.0,), (ua, ue))
+    if view_space["kind"] != "grid":
+        corners = corners[:2]
+    return ViewBlend(
+        tuple(int(v) for v, _ in corners), tuple(float(w) for _, w in corners), (ua, ue)
+    )

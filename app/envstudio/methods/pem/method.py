@@ -1,0 +1,362 @@
+"""Method ``pem``: parameterized environment map playback (seed 003 §4–6).
+
+A bake (``envstudio bake pem``: per view and reflector part, the inferred
+distant box map, the local ellipsoid map as premultiplied RGBA, and a single
+sphere-at-infinity map, every MIP level) is drawn by shaders/pem/pem.glsl:
+per-fragment texgen against the box and the part's ellipsoid, the layered
+composite with Schlick Fresnel and the SH diffuse layer, blended over the
+nearest views of the parameter space (methods/pem/blending.py). The EM model
+switch also offers the sphere at infinity and the scene's static EM (seed 003
+Figures 1 and 6). Without a bake for the scene the method shows the static EM
+and says how to bake one.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import moderngl
+import numpy as np
+
+from envstudio.bake.pem.pem_file import PemBake, load_pem
+from envstudio.core.cubemap import faces_to_cross
+from envstudio.errors import InputFileError
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.base import Method, register
+from envstudio.methods.context import FrameInputs, GpuScene
+from envstudio.methods.parameters import Parameter
+from envstudio.methods.pem.blending import ViewBlend, view_blend
+from envstudio.methods.pem.gpu import MODELS, PemTextures
+from envstudio.methods.pem.verify import check_bake_for_scene
+from envstudio.methods.rsibr.figure import to_ldr, upright
+from envstudio.resources import asset_root
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = ["PemMethod", "shipped_bake"]
+
+
+def shipped_bake(scene_name: str) -> Path:
+    """Where a scene's shipped bake lives: ``assets/pem/<scene>.pem``."""
+    return asset_root() / "pem" / f"{scene_name}.pem"
+
+
+@dataclass
+class _Loaded:
+    """The bake on show and what it was loaded for."""
+
+    key: tuple
+    path: Path
+    bake: PemBake
+    textures: PemTextures
+
+
+@register
+class PemMethod(Method):
+    """Layered PEM playback with view blending (seed 003 §4, "run-time")."""
+
+    name = "pem"
+    title = "PEM (Hakura–Snyder–Lengyel)"
+    summary = (
+        "Per-view environment maps inferred from ray traces (box + ellipsoid layers), "
+        "blended across the nearest baked views."
+    )
+    panel_figure = "Inferred maps of the nearest view (seed 003 Figure 5)"
+    parameters = (
+        Parameter(
+            "pem",
+            "path",
+            "",
+            help="The .pem bake to play; empty: the scene's shipped bake (assets/pem/<scene>.pem).",
+            choices=(".pem",),
+        ),
+        Parameter(
+            "em_model",
+            "choice",
+            "layered",
+            help="EM model: layered box + ellipsoid, one sphere at infinity, or the static EM.",
+            choices=MODELS,
+        ),
+        Parameter("blend", "bool", True, help="Blend the nearest 2 (arc) or 4 (grid) views."),
+        Parameter("snap", "bool", False, help="Put the camera on the baked path at `path`."),
+        Parameter("play", "bool", False, help="Move the camera along the path (snaps it)."),
+        Parameter("path", "float", 0.5, 0.0, 1.0, "", "Position along the path's azimuths."),
+        Parameter(
+            "path_elevation", "float", 0.5, 0.0, 1.0, "", "Position along a grid's elevations."
+        ),
+        Parameter("play_speed", "float", 0.1, 0.01, 1.0, "1/s", "Path fraction per second."),
+        Parameter("distant", "bool", True, help="Distant layer (the box map)."),
+        Parameter("local", "bool", True, help="Local layer (the ellipsoid map, RGBA over)."),
+        Parameter("fresnel_layer", "bool", True, help="Fresnel modulation of the reflection."),
+        Parameter("diffuse", "bool", True, help="Diffuse layer (1 − F) k_d/π E_sh9(n)."),
+        Parameter("hull", "bool", True, help="Convex-hull triangles use the distant map only."),
+        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick f_λ of the Fresnel layer."),
+        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo of the diffuse layer."),
+    )
+
+    def __init__(self, ctx: moderngl.Context, programs):
+        super().__init__(ctx, programs)
+        self._loaded: _Loaded | None = None
+        self._missing: str = ""
+        self._dummy: dict[str, moderngl.Texture] = {}
+        self._thumbnails: list[moderngl.Texture] = []
+        self._last_play: float | None = None
+        self.last_blend: ViewBlend | None = None
+
+    # -- loading ---------------------------------------------------------------------
+
+    def _requested(self, scene: GpuScene) -> tuple[Path, bool]:
+        """The bake file asked for and whether it was named explicitly."""
+        named = str(self.values["pem"]).strip()
+        if named:
+            return Path(named).expanduser(), True
+        return shipped_bake(scene.scene.name), False
+
+    def _key(self, scene: GpuScene) -> tuple:
+        """What a loaded bake is valid for: the file asked for, the scene, its meshes."""
+        path, _ = self._requested(scene)
+        meshes = tuple(id(node.mesh) for node in scene.reflectors())
+        return (str(path.resolve()) if path.exists() else str(path), id(scene), meshes)
+
+    def prepare(self, scene: GpuScene) -> None:
+        """Load and verify the bake the ``pem`` parameter names (kept while unchanged).
+
+        Raises
+        ------
+        InputFileError
+            The file is missing, not a valid ``.pem``, or baked for another scene
+            or mesh; the bake shown before (if any) stays, and ``pem`` is set back
+            to its file.
+        """
+        path, named = self._requested(scene)
+        key = self._key(scene)
+        if self._loaded is not None and self._loaded.key == key:
+            return
+        if not named and not path.exists():
+            self._release_loaded()
+            self._missing = (
+                f"no bake for scene {scene.scene.name!r} ({path.name}): showing the static EM; "
+                f"bake one with `envstudio bake pem --scene {scene.scene.name} -o FILE.pem` "
+                "and set pem=FILE.pem"
+            )
+            return
+        try:
+            self.show(load_pem(path), scene, path, key)
+        except InputFileError:
+            if self._loaded is not None:
+                previous = self._loaded.path
+                shipped = previous == shipped_bake(scene.scene.name)
+                self.values["pem"] = "" if shipped else str(previous)
+            raise
+
+    def show(self, bake: PemBake, scene: GpuScene, path: Path, key: tuple | None = None) -> None:
+        """Verify ``bake`` against the scene, upload it and draw it from now on.
+
+        Parameters
+        ----------
+        bake
+            A loaded bake.
+        scene
+            The scene on show.
+        path
+            Its file (for messages).
+        key
+            What :meth:`prepare` keys the loaded bake on (None: kept until ``pem`` changes).
+
+        Raises
+        ------
+        InputFileError
+            A bake of another scene or mesh, or too large for this GL's textures;
+            the bake shown before stays.
+        """
+        check_bake_for_scene(bake, scene.scene, path)
+        textures = PemTextures(self.ctx, bake)
+        self._release_loaded()
+        self._missing = ""
+        self._loaded = _Loaded(self._key(scene) if key is None else key, Path(path), bake, textures)
+
+    @property
+    def bake(self) -> PemBake | None:
+        """The bake on show (None: none for this scene)."""
+        return None if self._loaded is None else self._loaded.bake
+
+    # -- the camera on the path ------------------------------------------------------------
+
+    def path_camera(self, position: float, elevation: float = 0.5) -> OrbitCamera:
+        """The camera at fractions ``position`` (azimuth) and ``elevation`` of the baked path."""
+        space = self.bake.view_space
+        az = np.asarray(space["azimuths"], dtype=np.float64)
+        el = np.asarray(space["elevations"], dtype=np.float64)
+        return OrbitCamera(
+            azimuth=float(np.interp(position * (len(az) - 1), np.arange(len(az)), az)),
+            elevation=float(np.interp(elevation * (len(el) - 1), np.arange(len(el)), el)),
+            distance=float(space["distance"]),
+            target=np.asarray(space["target"], dtype=np.float64),
+            fov_y=float(space["fov_y"]),
+        )
+
+    def steer_camera(self, camera: OrbitCamera) -> None:
+        """Snap or play: put the camera on the baked path (seed 003's manifold)."""
+        if self.bake is None or not (self.values["snap"] or self.values["play"]):
+            self._last_play = None
+            return
+        if self.values["play"]:
+            now = time.perf_counter()
+            if self._last_play is not None:
+                step = min(now - self._last_play, 0.1) * float(self.values["play_speed"])
+                position = (float(self.values["path"]) + step) % 1.0
+                self.values["path"] = position
+            self._last_play = now
+        on_path = self.path_camera(float(self.values["path"]), float(self.values["path_elevation"]))
+        camera.azimuth, camera.elevation = on_path.azimuth, on_path.elevation
+        camera.distance, camera.target, camera.fov_y = (
+            on_path.distance,
+            on_path.target,
+            on_path.fov_y,
+        )
+
+    # -- drawing ---------------------------------------------------------------------------
+
+    def _dummies(self) -> dict[str, moderngl.Texture]:
+        if not self._dummy:
+            zero = np.zeros(4, np.float32).tobytes()
+            self._dummy = {
+                "atlas": self.ctx.texture((1, 1), 4, zero, dtype="f4"),
+                "hull": self.ctx.texture((1, 1), 1, b"\0", dtype="u1"),
+            }
+            for texture in self._dummy.values():
+                texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return self._dummy
+
+    def _bind(self, program: moderngl.Program, frame: FrameInputs) -> int:
+        """Bind textures and per-frame uniforms; returns the model drawn."""
+        environment = frame.scene.static_environment(frame.timer)
+        environment.cube.use(location=0)
+        set_uniform(program, "u_static", 0)
+        loaded, dummy = self._loaded, self._dummies()
+        for unit, model in enumerate(("distant", "local", "sphere"), start=1):
+            texture = dummy["atlas"] if loaded is None else loaded.textures.atlases[model]
+            texture.use(location=unit)
+            set_uniform(program, f"u_{model}", unit)
+        (dummy["hull"] if loaded is None else loaded.textures.hull).use(location=4)
+        set_uniform(program, "u_hull", 4)
+        set_uniform(program, "u_camera_position", frame.camera_position)
+        set_uniform(program, "u_view", frame.view)
+        set_uniform(program, "u_projection", frame.projection)
+        set_uniform(program, "u_sh9", frame.scene.sh9)
+        set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
+        set_uniform(program, "u_kd", float(self.values["kd"]))
+        for name in ("distant", "local", "diffuse", "hull"):
+            set_uniform(program, f"u_use_{name}", bool(self.values[name]))
+        set_uniform(program, "u_use_fresnel", bool(self.values["fresnel_layer"]))
+        if loaded is None:
+            set_uniform(program, "u_em_model", MODELS.index("static"))
+            set_uniform(program, "u_use_hull", False)
+            self.last_blend = None
+            return MODELS.index("static")
+        bake = loaded.bake
+        blend = view_blend(bake.view_space, frame.camera_position, bool(self.values["blend"]))
+        self.last_blend = blend
+        views = list(blend.views) + [0] * (4 - len(blend.views))
+        weights = list(blend.weights) + [0.0] * (4 - len(blend.weights))
+        set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[4]
+        set_uniform(program, "u_view_weight", tuple(float(w) for w in weights))
+        set_uniform(program, "u_views_blended", len(blend.views))
+        set_uniform(program, "u_parts", len(bake.parts))
+        set_uniform(program, "u_atlas_width", loaded.textures.width)
+        set_uniform(program, "u_hull_width", loaded.textures.width)
+        set_uniform(program, "u_em_size", bake.em_size)
+        set_uniform(program, "u_em_levels", len(bake.maps["distant"]))
+        set_uniform(program, "u_box_lo", bake.box[0])
+        set_uniform(program, "u_box_hi", bake.box[1])
+        model = MODELS.index(str(self.values["em_model"]))
+        set_uniform(program, "u_em_model", model)
+        return model
+
+    def set_part_uniforms(self, program: moderngl.Program, part: int) -> None:
+        """The part's EM origin, ellipsoid and hull flags (no-op without a bake)."""
+        set_uniform(program, "u_part", part)
+        if self._loaded is None:
+            return
+        bake = self._loaded.bake
+        set_uniform(program, "u_em_origin", bake.origins[part])
+        set_uniform(program, "u_ellipsoid_centre", bake.ellipsoids[part, 0])
+        set_uniform(program, "u_ellipsoid_radii", bake.ellipsoids[part, 1])
+        set_uniform(program, "u_hull_offset", self._loaded.textures.hull_offsets[part])
+
+    def render(self, frame: FrameInputs) -> None:
+        self.prepare(frame.scene)
+        program = self.programs.get("pem/pem.glsl")
+        self._bind(program, frame)
+        frame.target.use()  # the static EM's capture may have bound its own framebuffer
+        with frame.timer.measure("pem"):
+            for part, gpu_node in enumerate(frame.scene.reflectors()):
+                self.set_part_uniforms(program, part)
+                set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                set_uniform(program, "u_model", gpu_node.model)
+                gpu_node.mesh.render(program)
+
+    # -- the panel -------------------------------------------------------------------------
+
+    def status_line(self) -> str:
+        if self._missing:
+            return self._missing
+        if self._loaded is None or self.last_blend is None:
+            return ""
+        bake, blend = self._loaded.bake, self.last_blend
+        pairs = zip(blend.views, blend.weights, strict=True)
+        views = " + ".join(f"{v} ({w:.2f})" for v, w in pairs)
+        mb = sum(t.width * t.height * 16 for t in self._loaded.textures.atlases.values()) / 1e6
+        return (
+            f"{bake.views} views x {len(bake.parts)} parts resident ({mb:.1f} MB, uploaded in "
+            f"{self._loaded.textures.upload_ms:.0f} ms); blending views {views}"
+        )
+
+    def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
+        """Figure 5: the nearest view's maps of the first part, per layer and level.
+
+        Returns
+        -------
+        list of (label, texture)
+            Distant, local (colour over black) and sphere maps at level 0, then the
+            distant map's levels 1–4: horizontal crosses, RGBA8, owned by the method.
+        """
+        if self._loaded is None or self.last_blend is None:
+            return []
+        bake = self._loaded.bake
+        view = self.last_blend.views[int(np.argmax(self.last_blend.weights))]
+        images, labels = [], []
+        for model in ("distant", "local", "sphere"):
+            images.append(bake.maps[model][0][view, 0][..., :3])
+            labels.append(f"{model}, level 0 (view {view}, {bake.parts[0]})")
+        for level in range(1, min(5, len(bake.maps["distant"]))):
+            images.append(bake.maps["distant"][level][view, 0])
+            labels.append(f"distant, level {level}")
+        crosses = [upright(to_ldr(faces_to_cross(im), exposure, tonemap)) for im in images]
+        if [t.size for t in self._thumbnails] != [c.shape[1::-1] for c in crosses]:
+            self._release_thumbnails()
+            self._thumbnails = [self.ctx.texture(c.shape[1::-1], 4) for c in crosses]
+        for texture, rgb in zip(self._thumbnails, crosses, strict=True):
+            alpha = np.full((*rgb.shape[:2], 1), 255, np.uint8)
+            texture.write(np.ascontiguousarray(np.concatenate([rgb, alpha], axis=-1)).tobytes())
+        return list(zip(labels, self._thumbnails, strict=True))
+
+    # -- cleanup ---------------------------------------------------------------------------
+
+    def _release_thumbnails(self) -> None:
+        for texture in self._thumbnails:
+            texture.release()
+        self._thumbnails = []
+
+    def _release_loaded(self) -> None:
+        if self._loaded is not None:
+            self._loaded.textures.release()
+            self._loaded = None
+
+    def release(self) -> None:
+        self._release_loaded()
+        self._release_thumbnails()
+        for texture in self._dummy.values():
+            texture.release()
+        self._dummy = {}

@@ -1,0 +1,46 @@
+"""Is a bake for this scene? (issue 19, "Bad input": refused in one line.)"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from envstudio.bake.pem.pem_file import PemBake
+from envstudio.errors import InputFileError
+from envstudio.scene.graph import Scene
+
+__all__ = ["check_bake_for_scene"]
+
+
+def check_bake_for_scene(bake: PemBake, scene: Scene, path: Path) -> None:
+    """Refuse a bake of another scene, other reflector parts or another mesh.
+
+    Parameters
+    ----------
+    bake
+        A loaded, checksum-verified bake.
+    scene
+        The scene on show.
+    path
+        The bake's file, for the message.
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file, what it holds and what the scene expects.
+    """
+    parts = [node.name for node in scene.reflectors()]
+    if bake.scene != scene.name:
+        raise InputFileError(
+            f"{path}: a bake of scene {bake.scene!r}, expected one of {scene.name!r}"
+        )
+    if list(bake.parts) != parts:
+        raise InputFileError(
+            f"{path}: reflector parts {', '.join(bake.parts)}, expected {', '.join(parts)}"
+        )
+    for node, hull in zip(scene.reflectors(), bake.hull, strict=True):
+        triangles = len(node.mesh.indices)
+        if len(hull) != triangles:
+            raise InputFileError(
+                f"{path}: part {node.name!r} was baked with {len(hull)} triangles, "
+                f"the scene's mesh has {triangles}: re-bake"
+            )

@@ -1,0 +1,128 @@
+#version 330 core
+// Method `pem`: playback of parameterized environment maps (seed 003 section 4).
+// Per fragment of a reflector part: the reflected ray off the interpolated
+// surface point and normal (texgen, seed 003 section 4 "run-time", done per
+// fragment rather than per vertex), intersected with the distant box and with the
+// part's local ellipsoid; the hit points minus the part's EM origin look up the
+// baked cube maps of the nearest views (trilinear, common to the bake's rendering
+// matrix: atlas.glsl). Composite (seed 003 section 4, "Layered EMs"):
+//     I = alpha_L L + (1 - alpha_L) D     (local premultiplied: L_p = alpha_L L)
+//     C = (1 - F) k_d / pi E_sh9(n) + F I
+// with Schlick's F (seed 000 section 5.2) as the bake traced it, blended over
+// the views with weights u_view_weight. Convex-hull triangles (gl_PrimitiveID
+// flags) use the distant map only. Models: 0 layered box + ellipsoid, 1 a single
+// sphere at infinity per view (lookup = r), 2 the static EM (u_static, seed 003
+// Figure 1c), chosen by u_em_model.
+//
+// PEM_LOOKUP: instead of shading, write what the bake builds its rendering
+// matrix from: per model (face, s, t, lod) and (part, hull, triangle, 1).
+#if defined VERTEX_SHADER
+#include "common/mesh_vs.glsl"
+#elif defined FRAGMENT_SHADER
+#include "common/cubemap.glsl"
+#include "common/fresnel.glsl"
+#include "common/sh.glsl"
+#include "pem/texgen.glsl"
+#include "pem/atlas.glsl"
+
+uniform vec3 u_camera_position;
+uniform vec3 u_box_lo;
+uniform vec3 u_box_hi;
+uniform vec3 u_em_origin;
+uniform vec3 u_ellipsoid_centre;
+uniform vec3 u_ellipsoid_radii;
+uniform int u_part;
+uniform int u_parts;
+uniform usampler2D u_hull;   // one flag per triangle, row-major in u_hull_width columns
+uniform int u_hull_width;
+uniform int u_hull_offset;   // this part's first triangle in u_hull
+uniform bool u_use_hull;
+in vec3 v_world_position;
+in vec3 v_world_normal;
+
+#if defined PEM_LOOKUP
+layout(location = 0) out vec4 f_distant;
+layout(location = 1) out vec4 f_local;
+layout(location = 2) out vec4 f_sphere;
+layout(location = 3) out vec4 f_part;
+#else
+uniform sampler2D u_distant;
+uniform sampler2D u_local;
+uniform sampler2D u_sphere;
+uniform samplerCube u_static;
+uniform int u_em_model;
+uniform int u_view_map[4];     // view index of each blended sample
+uniform float u_view_weight[4];
+uniform int u_views_blended;   // 1 (unblended), 2 (arc) or 4 (grid)
+uniform bool u_use_distant;
+uniform bool u_use_local;
+uniform bool u_use_fresnel;
+uniform bool u_use_diffuse;
+uniform float u_fresnel;
+uniform float u_kd;
+uniform vec3 u_sh9[9];
+out vec4 f_color;
+#endif
+
+bool pem_on_hull() {
+    int index = u_hull_offset + gl_PrimitiveID;
+    return texelFetch(u_hull, ivec2(index % u_hull_width, index / u_hull_width), 0).r != 0u;
+}
+
+void main() {
+    vec3 n = normalize(v_world_normal);
+    vec3 v = normalize(u_camera_position - v_world_position);
+    if (dot(n, v) < 0.0) {
+        n = -n;
+    }
+    vec3 r = reflect(-v, n);
+    vec3 p = v_world_position;
+    vec3 q_distant = pem_lookup(p, r, pem_box_exit(p, r, u_box_lo, u_box_hi), u_em_origin);
+    vec3 q_local = pem_lookup(
+        p, r, pem_ellipsoid_exit(p, r, u_ellipsoid_centre, u_ellipsoid_radii), u_em_origin);
+    // derivatives in uniform control flow, before any branch
+    float lod_distant = pem_lod(q_distant);
+    float lod_local = pem_lod(q_local);
+    float lod_sphere = pem_lod(r);
+    bool hull = u_use_hull && pem_on_hull();
+    int face_distant, face_local, face_sphere;
+    vec2 st_distant = cube_face_uv(q_distant, face_distant);
+    vec2 st_local = cube_face_uv(q_local, face_local);
+    vec2 st_sphere = cube_face_uv(r, face_sphere);
+#if defined PEM_LOOKUP
+    f_distant = vec4(float(face_distant), st_distant, lod_distant);
+    f_local = vec4(float(face_local), st_local, lod_local);
+    f_sphere = vec4(float(face_sphere), st_sphere, lod_sphere);
+    f_part = vec4(float(u_part), hull ? 1.0 : 0.0, float(gl_PrimitiveID), 1.0);
+#else
+    vec3 incident = vec3(0.0);
+    if (u_em_model == 2) {
+        incident = texture(u_static, r).rgb;
+    } else {
+        for (int k = 0; k < u_views_blended; ++k) {
+            int map = u_view_map[k] * u_parts + u_part;
+            vec3 sample_k;
+            if (u_em_model == 1) {
+                sample_k = pem_trilinear(u_sphere, map, face_sphere, st_sphere, lod_sphere).rgb;
+            } else {
+                vec3 distant = u_use_distant
+                    ? pem_trilinear(u_distant, map, face_distant, st_distant, lod_distant).rgb
+                    : vec3(0.0);
+                vec4 local = (u_use_local && !hull)
+                    ? pem_trilinear(u_local, map, face_local, st_local, lod_local)
+                    : vec4(0.0);
+                sample_k = local.rgb + (1.0 - local.a) * distant;
+            }
+            incident += u_view_weight[k] * sample_k;
+        }
+    }
+    // the diffuse layer (1 - F) d and the Fresnel modulation layer F (Figure 4);
+    // the Fresnel switch drops the modulation only
+    float fresnel = schlick_fresnel(u_fresnel, dot(r, n));
+    vec3 diffuse = u_use_diffuse
+        ? (1.0 - fresnel) * u_kd / 3.14159265358979 * max(sh9_irradiance(u_sh9, n), vec3(0.0))
+        : vec3(0.0);
+    f_color = vec4(diffuse + (u_use_fresnel ? fresnel : 1.0) * incident, 1.0);
+#endif
+}
+#endif
