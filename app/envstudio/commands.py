@@ -599,6 +599,27 @@ def run_figure(args: argparse.Namespace) -> int:
                 f"camera's frame (times its singularity fade), then the generated map ({n}²)"
             )
             return 0
+        if args.name == "pem-offmanifold":
+            from envstudio.methods.pem import offmanifold
+
+            method = session.method("pem")
+            apply_params(session, method, args.param)
+            method.prepare(session.gpu_scene)
+            if method.bake is None:
+                raise ParameterError(f"pem: {method.status_line()}")
+            results = offmanifold.measure(session, method, size=size[1])
+            offmanifold.figure_image(results, output)
+            print(f"{output}: rows: views off the baked arc; columns: ray trace, layered PEM, ")
+            print("sphere at infinity, static EM (displayed PSNR dB / FLIP, * best)")
+            for r in results:
+                cells = "  ".join(
+                    f"{m} {v['psnr']:.2f} dB / {v['flip']:.4f}" for m, v in r.metrics.items()
+                )
+                print(
+                    f"{r.view.label:>14} (az {r.view.azimuth:.2f}°, el {r.view.elevation:.2f}°): "
+                    f"{cells}"
+                )
+            return 0
         if args.name == "banks-slices":
             from envstudio.render import banks_figure
 

@@ -16,21 +16,56 @@
 //
 // PEM_LOOKUP: instead of shading, write what the bake builds its rendering
 // matrix from: per model (face, s, t, lod) and (part, hull, triangle, 1).
-#if defined VERTEX_SHADER
-#include "common/mesh_vs.glsl"
-#elif defined FRAGMENT_SHADER
-#include "common/cubemap.glsl"
-#include "common/fresnel.glsl"
-#include "common/sh.glsl"
-#include "pem/texgen.glsl"
-#include "pem/atlas.glsl"
-
+//
+// PEM_TEXGEN_VERTEX: the paper's texgen, per vertex (the reflected ray off each
+// vertex with its normal, intersected in the vertex stage), the lookup vectors
+// interpolated across triangles; the level still comes from their derivatives.
 uniform vec3 u_camera_position;
 uniform vec3 u_box_lo;
 uniform vec3 u_box_hi;
 uniform vec3 u_em_origin;
 uniform vec3 u_ellipsoid_centre;
 uniform vec3 u_ellipsoid_radii;
+#include "pem/texgen.glsl"
+
+#if defined VERTEX_SHADER
+#include "common/mesh_world.glsl"
+uniform mat4 u_view;
+uniform mat4 u_projection;
+out vec3 v_q_distant;
+out vec3 v_q_local;
+out vec3 v_reflected;
+
+void main() {
+    vec4 world = mesh_world();
+    gl_Position = u_projection * u_view * world;
+#if defined PEM_TEXGEN_VERTEX
+    vec3 n = normalize(v_world_normal);
+    vec3 v = normalize(u_camera_position - world.xyz);
+    if (dot(n, v) < 0.0) {
+        n = -n;
+    }
+    vec3 r = reflect(-v, n);
+    vec3 p = world.xyz;
+    v_q_distant = pem_lookup(p, r, pem_box_exit(p, r, u_box_lo, u_box_hi), u_em_origin);
+    v_q_local = pem_lookup(
+        p, r, pem_ellipsoid_exit(p, r, u_ellipsoid_centre, u_ellipsoid_radii), u_em_origin);
+    v_reflected = r;
+#else
+    v_q_distant = vec3(0.0);
+    v_q_local = vec3(0.0);
+    v_reflected = vec3(0.0);
+#endif
+}
+#elif defined FRAGMENT_SHADER
+#include "common/cubemap.glsl"
+#include "common/fresnel.glsl"
+#include "common/sh.glsl"
+#include "pem/atlas.glsl"
+
+in vec3 v_q_distant;
+in vec3 v_q_local;
+in vec3 v_reflected;
 uniform int u_part;
 uniform int u_parts;
 uniform usampler2D u_hull;   // one flag per triangle, row-major in u_hull_width columns
@@ -76,19 +111,26 @@ void main() {
         n = -n;
     }
     vec3 r = reflect(-v, n);
+#if defined PEM_TEXGEN_VERTEX
+    vec3 q_distant = v_q_distant;
+    vec3 q_local = v_q_local;
+    vec3 r_lookup = v_reflected;
+#else
     vec3 p = v_world_position;
     vec3 q_distant = pem_lookup(p, r, pem_box_exit(p, r, u_box_lo, u_box_hi), u_em_origin);
     vec3 q_local = pem_lookup(
         p, r, pem_ellipsoid_exit(p, r, u_ellipsoid_centre, u_ellipsoid_radii), u_em_origin);
+    vec3 r_lookup = r;
+#endif
     // derivatives in uniform control flow, before any branch
     float lod_distant = pem_lod(q_distant);
     float lod_local = pem_lod(q_local);
-    float lod_sphere = pem_lod(r);
+    float lod_sphere = pem_lod(r_lookup);
     bool hull = u_use_hull && pem_on_hull();
     int face_distant, face_local, face_sphere;
     vec2 st_distant = cube_face_uv(q_distant, face_distant);
     vec2 st_local = cube_face_uv(q_local, face_local);
-    vec2 st_sphere = cube_face_uv(r, face_sphere);
+    vec2 st_sphere = cube_face_uv(r_lookup, face_sphere);
 #if defined PEM_LOOKUP
     f_distant = vec4(float(face_distant), st_distant, lod_distant);
     f_local = vec4(float(face_local), st_local, lod_local);

@@ -11,10 +11,19 @@ from envstudio.bake.pem.pem_file import PemBake
 from envstudio.errors import InputFileError
 from envstudio.methods.pem.atlas import ATLAS_WIDTH, pack_atlas, pack_flags
 
-__all__ = ["MODELS", "PemTextures"]
+__all__ = ["MODELS", "TEXGENS", "PemTextures", "texgen_defines"]
 
-#: EM models of the panel's switch, in the shader's ``u_model`` order.
+#: EM models of the panel's switch, in the shader's ``u_em_model`` order.
 MODELS = ("layered", "sphere", "static")
+#: Where the lookup vectors are computed: per fragment, or per vertex (seed 003 §4).
+TEXGENS = ("fragment", "vertex")
+
+
+def texgen_defines(texgen: str) -> dict[str, int]:
+    """The defines of shaders/pem/pem.glsl for a texgen mode of :data:`TEXGENS`."""
+    if texgen not in TEXGENS:
+        raise ValueError(f"texgen {texgen!r}: expected one of {', '.join(TEXGENS)}")
+    return {"PEM_TEXGEN_VERTEX": 1} if texgen == "vertex" else {}
 
 
 class PemTextures:

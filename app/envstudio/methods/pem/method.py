@@ -24,11 +24,11 @@ from envstudio.bake.pem.pem_file import PemBake, load_pem
 from envstudio.core.cubemap import faces_to_cross
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method, register
+from envstudio.methods.base import Method, ReportExtra, register
 from envstudio.methods.context import FrameInputs, GpuScene
 from envstudio.methods.parameters import Parameter
 from envstudio.methods.pem.blending import ViewBlend, view_blend
-from envstudio.methods.pem.gpu import MODELS, PemTextures
+from envstudio.methods.pem.gpu import MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.methods.rsibr.figure import to_ldr, upright
 from envstudio.resources import asset_root
@@ -77,6 +77,14 @@ class PemMethod(Method):
             "layered",
             help="EM model: layered box + ellipsoid, one sphere at infinity, or the static EM.",
             choices=MODELS,
+        ),
+        Parameter(
+            "texgen",
+            "choice",
+            "fragment",
+            help="Reflection lookups per fragment, or per vertex as the paper (interpolated).",
+            choices=TEXGENS,
+            rebuild=True,
         ),
         Parameter("blend", "bool", True, help="Blend the nearest 2 (arc) or 4 (grid) views."),
         Parameter("snap", "bool", False, help="Put the camera on the baked path at `path`."),
@@ -287,7 +295,7 @@ class PemMethod(Method):
 
     def render(self, frame: FrameInputs) -> None:
         self.prepare(frame.scene)
-        program = self.programs.get("pem/pem.glsl")
+        program = self.programs.get("pem/pem.glsl", texgen_defines(str(self.values["texgen"])))
         self._bind(program, frame)
         frame.target.use()  # the static EM's capture may have bound its own framebuffer
         with frame.timer.measure("pem"):
@@ -341,6 +349,74 @@ class PemMethod(Method):
             alpha = np.full((*rgb.shape[:2], 1), 255, np.uint8)
             texture.write(np.ascontiguousarray(np.concatenate([rgb, alpha], axis=-1)).tobytes())
         return list(zip(labels, self._thumbnails, strict=True))
+
+    def report_extras(self, session, out_dir: Path) -> list[ReportExtra]:
+        """Seed 003 Figures 6–7 and §6's wobble, measured (methods/pem/offmanifold.py).
+
+        At views midway between baked samples and 10° and 20° above the arc, each
+        EM model against a ray trace at that exact view; the views where the
+        layered PEM is not best are named. Then the mean frame-to-frame change
+        along a slow sweep, per model and for the traced frames.
+        """
+        from envstudio.methods.pem import offmanifold
+
+        if self.bake is None:
+            return []
+        saved = (session.camera.azimuth, session.camera.elevation, session.camera.distance)
+        saved_target, saved_fov = session.camera.target.copy(), session.camera.fov_y
+        try:
+            results = offmanifold.measure(session, self)
+            motion = offmanifold.wobble(session, self)
+        finally:
+            camera = session.camera
+            camera.azimuth, camera.elevation, camera.distance = saved
+            camera.target, camera.fov_y = saved_target, saved_fov
+        offmanifold.figure_image(results, out_dir / "pem_offmanifold.png")
+        rows = [
+            [
+                r.view.label,
+                f"{r.view.azimuth:.2f}",
+                f"{r.view.elevation:.2f}",
+                *(f"{r.metrics[m]['psnr']:.2f} / {r.metrics[m]['flip']:.4f}" for m in MODELS),
+                r.best,
+            ]
+            for r in results
+        ]
+        losers = [r.view.label for r in results if r.best != "layered"]
+        verdict = (
+            "The layered PEM is best at every view."
+            if not losers
+            else f"The layered PEM is not best at: {', '.join(losers)}."
+        )
+        wobble_text = ", ".join(f"{k} {v:.4f}" for k, v in motion.items())
+        return [
+            ReportExtra(
+                title="PEM off the manifold (seed 003 Figures 6-7)",
+                text=(
+                    "Displayed PSNR (dB) / mean FLIP over the reflector's fully covered pixels, "
+                    f"against a ray trace at each view. {verdict} Wobble (mean absolute "
+                    f"frame-to-frame change, 0-1, along a 0.25° sweep): {wobble_text}."
+                ),
+                columns=["view", "azimuth °", "elevation °", *MODELS, "best"],
+                rows=rows,
+                data={
+                    "views": [
+                        {
+                            "label": r.view.label,
+                            "azimuth": r.view.azimuth,
+                            "elevation": r.view.elevation,
+                            "pixels": r.pixels,
+                            "metrics": r.metrics,
+                            "best": r.best,
+                        }
+                        for r in results
+                    ],
+                    "layered_not_best": losers,
+                    "wobble": motion,
+                },
+                images=[("pem_offmanifold.png", "trace | layered | sphere | static per view")],
+            )
+        ]
 
     # -- cleanup ---------------------------------------------------------------------------
 
