@@ -118,6 +118,10 @@ class Method(ABC):
     def steer_camera(self, camera: OrbitCamera) -> None:  # noqa: B027  (optional hook)
         """Move the camera before a frame (``pem`` snaps it to its baked path); most do not."""
 
+    def bench_notes(self) -> dict:
+        """What ``envstudio bench`` reports beside this method's times (JSON-ready; none)."""
+        return {}
+
     def finished(self) -> bool:
         """True when another frame would not change the image (progressive methods: converged)."""
         return True

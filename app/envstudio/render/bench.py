@@ -78,7 +78,14 @@ def run_bench(
             "frame": _summary(frame_ms),
             "passes": {k: _summary(v) for k, v in passes.items()},
         }
+        notes = method.bench_notes()
+        if notes:
+            report["methods"][name]["notes"] = notes
     bar.close()
+    if "mirror" in report["methods"]:
+        mirror = report["methods"]["mirror"]["frame"]["median_ms"]
+        for entry in report["methods"].values():
+            entry["frame"]["ratio_to_mirror"] = entry["frame"]["median_ms"] / mirror
     return report
 
 
@@ -92,8 +99,12 @@ def format_report(report: dict) -> str:
     ]
     for name, entry in report["methods"].items():
         passes = "  ".join(f"{k}={v['median_ms']:.3f}" for k, v in entry["passes"].items())
+        ratio = entry["frame"].get("ratio_to_mirror")
+        ratio = f"  ({ratio:.2f}x mirror)" if ratio is not None else ""
         lines.append(
             f"{name:<12} {entry['frame']['median_ms']:>10.3f} "
-            f"{entry['frame']['p95_ms']:>10.3f}  {passes}"
+            f"{entry['frame']['p95_ms']:>10.3f}  {passes}{ratio}"
         )
+        for key, value in entry.get("notes", {}).items():
+            lines.append(f"{'':<12} {key}: {value}")
     return "\n".join(lines)

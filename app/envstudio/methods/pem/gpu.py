@@ -76,6 +76,11 @@ class PemTextures:
         ctx.finish()
         self.upload_ms = (time.perf_counter() - start) * 1e3
 
+    @property
+    def megabytes(self) -> float:
+        """GPU memory of the atlases, MB."""
+        return sum(t.width * t.height * 16 for t in self.atlases.values()) / 1e6
+
     def release(self) -> None:
         """Free the textures; safe to call twice."""
         for texture in self.atlases.values():

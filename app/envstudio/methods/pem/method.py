@@ -315,11 +315,26 @@ class PemMethod(Method):
         bake, blend = self._loaded.bake, self.last_blend
         pairs = zip(blend.views, blend.weights, strict=True)
         views = " + ".join(f"{v} ({w:.2f})" for v, w in pairs)
-        mb = sum(t.width * t.height * 16 for t in self._loaded.textures.atlases.values()) / 1e6
+        mb = self._loaded.textures.megabytes
         return (
             f"{bake.views} views x {len(bake.parts)} parts resident ({mb:.1f} MB, uploaded in "
             f"{self._loaded.textures.upload_ms:.0f} ms); blending views {views}"
         )
+
+    def bench_notes(self) -> dict:
+        """The bake on show: views resident, texture memory, the one-off upload, the blend."""
+        if self._loaded is None:
+            return {"bake": self._missing or "none"}
+        textures = self._loaded.textures
+        mb = textures.megabytes
+        return {
+            "bake": str(self._loaded.path),
+            "views_resident": self._loaded.bake.views,
+            "texture_mb": round(mb, 2),
+            "upload_ms_once": round(textures.upload_ms, 2),
+            "view_switch_upload_ms": 0.0,
+            "views_blended": 0 if self.last_blend is None else len(self.last_blend.views),
+        }
 
     def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
         """Figure 5: the nearest view's maps of the first part, per layer and level.
