@@ -8,13 +8,15 @@ import numpy as np
 import pytest
 
 from envstudio.bake.pem import SceneTracer
-from envstudio.bake.pem.bake import parts_folder, run_bake
-from envstudio.bake.pem.infer import infer_distant
-from envstudio.bake.pem.pem_file import ARRAYS, _checksum, load_pem
+from envstudio.bake.pem import bake as bake_module
+from envstudio.bake.pem.bake import ViewTask, bake_view, parts_folder, run_bake
+from envstudio.bake.pem.hull import mesh_check, reflector_hulls
+from envstudio.bake.pem.lookups import MODELS, PLAYBACK
+from envstudio.bake.pem.pem_file import MAGIC, PemBake, load_pem, save_pem
 from envstudio.bake.pem.views import arc_views
 from envstudio.cli import main
 from envstudio.errors import InputFileError
-from envstudio.io.scene_file import load_scene
+from envstudio.io.scene_file import load_scene, resolve_scene
 
 TINY = {"size": 32, "samples": 2, "em_size": 4, "workers": 0}
 
@@ -30,38 +32,56 @@ def baked(tmp_path_factory):
     return path, report
 
 
+def _same_bake(a: PemBake, b: PemBake):
+    for m in MODELS:
+        for x, y in zip(a.maps[m], b.maps[m], strict=True):
+            np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(a.psnr[m], b.psnr[m])
+    for n in PLAYBACK:
+        np.testing.assert_array_equal(a.playback_psnr[n], b.playback_psnr[n])
+
+
 def test_round_trip_equals_inference(baked):
     path, report = baked
     assert report.baked == [0, 1] and not parts_folder(path).exists()
+    assert path.read_bytes()[:8] == MAGIC
     bake = load_pem(path)
     scene = load_scene("room")
     tracer = SceneTracer(scene)
-    assert bake.parts == tracer.part_names and bake.distant.shape == (2, 2, 6, 4, 4, 3)
+    assert bake.parts == tracer.part_names and bake.levels == 3 and bake.em_size == 4
+    assert [lv.shape for lv in bake.maps["local"]] == [(2, 2, 6, n, n, 4) for n in (4, 2, 1)]
+    assert bake.maps["distant"][0].dtype == np.float32
     assert bake.view_space == arc_views(scene.camera, 2, 5.0).describe()
-    for v, camera in enumerate(arc_views(scene.camera, 2, 5.0).cameras()):
-        view = tracer.trace(camera, 32, 2, seed=v)
-        for p in range(len(tracer.part_names)):
-            em = infer_distant(scene, tracer, view, p, size=4)
-            np.testing.assert_array_equal(bake.distant[v, p], em.em.astype(np.float32))
-            np.testing.assert_array_equal(bake.seen[v, p], em.seen)
-            assert bake.psnr[v, p] == em.psnr
-            np.testing.assert_array_equal(bake.origins[p], em.origin)
+    # the file holds each view's bake_view maps to half-float precision, every level
+    camera = arc_views(scene.camera, 2, 5.0).cameras()[1]
+    task = ViewTask(
+        str(resolve_scene("room").resolve()),
+        1,
+        camera.azimuth,
+        camera.elevation,
+        camera.distance,
+        tuple(camera.target),
+        camera.fov_y,
+        32,
+        2,
+        4,
+        1e-3,
+        0,
+    )
+    direct = bake_view(task)
+    for m in MODELS:
+        for k in range(3):
+            stored, exact = bake.maps[m][k][1], direct[f"{m}_{k}"]
+            scale = max(float(np.abs(exact).max()), 1e-6)
+            np.testing.assert_allclose(stored, exact, atol=2e-3 * scale, rtol=0)
+            np.testing.assert_array_equal(report.bake.maps[m][k][1], exact)
+        np.testing.assert_array_equal(bake.psnr[m][1], direct[f"psnr_{m}"])
+    assert bake.playback_psnr["layered"][1] == float(direct["playback_layered"])
+    assert bake.playback_psnr["layered"].min() > bake.playback_psnr["static"].max()
+    assert [h.tolist() for h in bake.hull] == [h.tolist() for h in reflector_hulls(scene)]
+    assert bake.mesh_checks == [mesh_check(n) for n in scene.reflectors()]
     np.testing.assert_array_equal(bake.cameras[:, 0], [scene.camera.azimuth + d for d in (0, 5)])
     assert np.all(bake.ellipsoids[:, 1] > 0) and np.all(bake.box[1] > bake.box[0])
-
-
-def _rewrite(src, dst, header_edit=None, array_edit=None, rehash=False):
-    with np.load(src) as data:
-        header = json.loads(str(data["header"]))
-        arrays = {k: np.array(data[k]) for k in ARRAYS}
-    if header_edit:
-        header_edit(header)
-    if array_edit:
-        array_edit(arrays)
-    if rehash:
-        header["checksum"] = _checksum(arrays, header)
-    np.savez(dst, header=np.array(json.dumps(header)), **arrays)
-    return dst
 
 
 def _refused(path, words):
@@ -75,24 +95,25 @@ def test_corrupt_files_are_refused_with_one_line(baked, tmp_path):
     path, _ = baked
     data = path.read_bytes()
     truncated = tmp_path / "truncated.pem"
-    truncated.write_bytes(data[: len(data) // 2])
-    _refused(truncated, "not a readable .pem")
-
-    def bump(arrays):
-        arrays["distant"][0, 0, 0, 0, 0, 0] += 1.0
-
-    _refused(_rewrite(path, tmp_path / "t.npz", array_edit=bump), "checksum mismatch")
-
-    def version(header):
-        header["version"] = 99
-
-    _refused(_rewrite(path, tmp_path / "v.npz", header_edit=version), "version 99")
-
-    def drop(arrays):
-        for k in ("distant", "seen", "psnr", "iterations", "cameras"):
-            arrays[k] = arrays[k][:1]
-
-    _refused(_rewrite(path, tmp_path / "m.npz", array_edit=drop, rehash=True), "views are missing")
+    truncated.write_bytes(data[: len(data) - 100])
+    _refused(truncated, "truncated")
+    tampered = tmp_path / "tampered.pem"
+    tampered.write_bytes(data[:-50] + bytes([data[-50] ^ 1]) + data[-49:])
+    _refused(tampered, "checksum mismatch")
+    header_edit = tmp_path / "header.pem"
+    header_edit.write_bytes(data.replace(b'"scene": "room"', b'"scene": "rOom"'))
+    _refused(header_edit, "checksum mismatch")
+    other = tmp_path / "v3.pem"
+    other.write_bytes(data[:8] + (3).to_bytes(4, "little") + data[12:])
+    _refused(other, "version 3")
+    old = tmp_path / "v1.pem"
+    with open(old, "wb") as f:  # the version-1 layout: an npz with a JSON header
+        np.savez(f, header=np.array(json.dumps({"format": "envstudio-pem", "version": 1})))
+    _refused(old, "re-bake")
+    bake = load_pem(path)
+    bake.maps = {m: [lv[:1] for lv in levels] for m, levels in bake.maps.items()}
+    bake.cameras = bake.cameras[:1]
+    _refused(save_pem(tmp_path / "m.pem", bake), "views are missing")
     not_pem = tmp_path / "x.pem"
     not_pem.write_text("hello")
     _refused(not_pem, "not a readable .pem")
@@ -123,8 +144,8 @@ def test_resumed_bake_skips_finished_views(baked, tmp_path, monkeypatch):
     assert not parts_folder(out).exists()
     a, b = load_pem(out), load_pem(reference)
     assert a.header["checksum"] == b.header["checksum"]
-    for name in ARRAYS:
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert out.read_bytes() == reference.read_bytes()
+    _same_bake(a, b)
 
 
 def test_parts_of_another_bake_are_not_reused(tmp_path):
@@ -154,14 +175,23 @@ def test_local_dask_cluster_bakes_the_same_file(baked, tmp_path):
     out = tmp_path / "dask.pem"
     report = run_bake("room", _arc(2), out, scheduler="local", **TINY)
     assert sorted(report.baked) == [0, 1] and not parts_folder(out).exists()
-    checksums = []
-    for path in (baked[0], out):
-        with np.load(path) as data:
-            checksums.append(json.loads(str(data["header"]))["checksum"])
-    assert checksums[0] == checksums[1]
     pool, dask = load_pem(baked[0]), load_pem(out)
-    for name in ("distant", "seen", "psnr", "iterations"):
-        np.testing.assert_array_equal(getattr(dask, name), getattr(pool, name))
+    assert pool.header["checksum"] == dask.header["checksum"]
+    _same_bake(dask, pool)
+
+
+def test_a_scheduler_that_does_not_answer_is_one_line(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "far.pem"
+    with pytest.raises(ValueError, match="no Dask scheduler answered within 1 s") as info:
+        run_bake("room", _arc(2), out, scheduler="tcp://127.0.0.1:9", connect_timeout=1, **TINY)
+    assert "\n" not in str(info.value) and not any(tmp_path.iterdir())
+    monkeypatch.setattr(bake_module, "DASK_CONNECT_TIMEOUT", 1.0)
+    argv = ["bake", "pem", "--scene", "room", "--views", "2", "--size", "32"]
+    argv += ["--scheduler", "tcp://127.0.0.1:9", "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "no Dask scheduler answered" in err, err
+    assert not any(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from envstudio.errors import ParameterError, UserError
+from envstudio.errors import ContextError, InputFileError, ParameterError, UserError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -60,6 +60,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     view = sub.add_parser("view", help="open the viewer window (the default)")
+    view.add_argument(
+        "file",
+        nargs="?",
+        help="an environment (.exr, .hdr), a mesh or a scene (.toml) to open: what a file "
+        "manager passes (the desktop entry runs `envstudio view FILE`)",
+    )
     _add_scene_options(view)
     view.add_argument("--method", help="method shown first")
     view.add_argument(
@@ -255,12 +261,21 @@ def build_parser() -> argparse.ArgumentParser:
     figure = sub.add_parser("figure", help="render a figure of a seed paper")
     figure.add_argument(
         "name",
-        choices=("kautz-grid", "kautz-seams", "hwconv-distortion", "banks-slices", "rsibr-warp"),
+        choices=(
+            "kautz-grid",
+            "kautz-seams",
+            "hwconv-distortion",
+            "banks-slices",
+            "rsibr-warp",
+            "pem-offmanifold",
+        ),
         help="kautz-grid: seed 000 Figure 6 (b x f_lambda); kautz-seams: Figure 4, "
         "box vs cross-face mip chain at b = 9.4, with the seam measurement; "
         "hwconv-distortion: seed 004 Figure 3, a paraboloid kernel's distortion on the "
         "sphere (no GL; the scene options are ignored); rsibr-warp: seed 002 Figure 4, "
-        "the three source maps, their warps into the camera's frame and the generated map",
+        "the three source maps, their warps into the camera's frame and the generated map; "
+        "pem-offmanifold: seed 003 Figures 6-7, layered PEM, sphere at infinity and static EM "
+        "against a ray trace midway between baked views and 10 and 20 degrees above the arc",
     )
     _add_scene_options(figure)
     _add_param_option(figure)
@@ -293,6 +308,22 @@ def _add_bake_parser(sub) -> None:
         help="rsibr: GPU importance samples per lobe (256); pem: rays per pixel (4)",
     )
     bake.add_argument("--em-size", type=int, help="pem: cube face edge of the EMs (default 64)")
+    bake.add_argument(
+        "--elevations",
+        type=int,
+        default=1,
+        help="pem: rows of a 2D view grid, --elevation-step apart from the scene camera's (1: arc)",
+    )
+    bake.add_argument(
+        "--elevation-step", type=float, default=5.0, help="pem: degrees between grid rows (5)"
+    )
+    bake.add_argument(
+        "--lookups",
+        choices=("auto", "gl", "cpu"),
+        default="auto",
+        help="pem: build A from the playback shader's own lookups on GL (auto: when a context "
+        "can be made) or from pixel-centre rays on the CPU",
+    )
     bake.add_argument(
         "--workers", type=int, help="pem: local processes (default one per core; 0 in-process)"
     )
@@ -383,6 +414,39 @@ def _add_prefilter_parser(sub) -> None:
     prefilter.add_argument("-o", "--output", required=True, help="OUT.exr (--chain: or OUT.dds)")
 
 
+def _open_file(args: argparse.Namespace) -> None:
+    """``envstudio view FILE``: FILE becomes ``--env``, ``--mesh`` or ``--scene`` by its suffix.
+
+    Raises
+    ------
+    InputFileError
+        FILE does not exist.
+    ParameterError
+        FILE is of no kind the viewer opens, or the option it stands for is also given.
+    """
+    from pathlib import Path
+
+    from envstudio.io.images import HDR_SUFFIXES
+    from envstudio.io.meshes import MESH_SUFFIXES
+
+    path = Path(args.file)
+    suffix = path.suffix.lower()
+    if suffix in HDR_SUFFIXES:
+        option = "env"
+    elif suffix in MESH_SUFFIXES:
+        option = "mesh"
+    elif suffix == ".toml":
+        option = "scene"
+    else:
+        kinds = ", ".join((*HDR_SUFFIXES, *MESH_SUFFIXES, ".toml"))
+        raise ParameterError(f"view {args.file}: expected a file of one of {kinds}")
+    if not path.is_file():
+        raise InputFileError(f"{args.file}: no such file")
+    if getattr(args, option) is not None:
+        raise ParameterError(f"view {args.file}: --{option} is given too; give one of them")
+    setattr(args, option, str(path))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status.
 
@@ -399,9 +463,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             from envstudio.doctor import run_doctor
 
             return run_doctor()
+        if command == "view" and args.file:
+            _open_file(args)
         from envstudio import commands
 
         return getattr(commands, f"run_{command.replace('-', '_')}")(args) or 0
+    except ContextError as exc:  # no GL (or no display): what is missing, and who says more
+        print(f"envstudio: error: {exc} (`envstudio doctor` checks this machine)", file=sys.stderr)
+        return exc.exit_code
     except UserError as exc:
         print(f"envstudio: error: {exc}", file=sys.stderr)
         return exc.exit_code

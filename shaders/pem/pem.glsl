@@ -95,6 +95,7 @@ uniform bool u_use_fresnel;
 uniform bool u_use_diffuse;
 uniform float u_fresnel;
 uniform float u_kd;
+uniform float u_lod_bias;      // the bake's parameters["lod_bias"], added before the clamp
 uniform vec3 u_sh9[9];
 out vec4 f_color;
 #endif
@@ -145,13 +146,15 @@ void main() {
             int map = u_view_map[k] * u_parts + u_part;
             vec3 sample_k;
             if (u_em_model == 1) {
-                sample_k = pem_trilinear(u_sphere, map, face_sphere, st_sphere, lod_sphere).rgb;
+                sample_k = pem_trilinear(
+                    u_sphere, map, face_sphere, st_sphere, lod_sphere + u_lod_bias).rgb;
             } else {
                 vec3 distant = u_use_distant
-                    ? pem_trilinear(u_distant, map, face_distant, st_distant, lod_distant).rgb
+                    ? pem_trilinear(
+                        u_distant, map, face_distant, st_distant, lod_distant + u_lod_bias).rgb
                     : vec3(0.0);
                 vec4 local = (u_use_local && !hull)
-                    ? pem_trilinear(u_local, map, face_local, st_local, lod_local)
+                    ? pem_trilinear(u_local, map, face_local, st_local, lod_local + u_lod_bias)
                     : vec4(0.0);
                 sample_k = local.rgb + (1.0 - local.a) * distant;
             }

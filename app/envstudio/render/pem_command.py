@@ -2,10 +2,12 @@
 
 Bad input (a view count below 1, a non-positive step, views that would coincide,
 a size out of range, an unknown scene, a scene without a reflector, a missing
-output folder) is refused with one line before any tracing. Views are baked on a
-local process pool and saved one by one to ``OUT.pem.parts/``; a rerun resumes
-from there, and ``OUT.pem`` is written atomically only when every view is done
-(bake/pem/bake.py).
+output folder, a ``--scheduler`` that does not answer) is refused with one line
+before any tracing. Views are baked on a local process pool or a Dask cluster and
+saved one by one to ``OUT.pem.parts/``; a rerun resumes from there, and
+``OUT.pem`` is written atomically only when every view is done (bake/pem/bake.py).
+The last line gives the mean predicted-playback PSNR of each model
+(bake/pem/models.py).
 """
 
 from __future__ import annotations
@@ -14,10 +16,12 @@ import argparse
 import math
 import sys
 
+import numpy as np
 from tqdm import tqdm
 
 from envstudio.bake.pem.bake import parts_folder, run_bake
-from envstudio.bake.pem.views import arc_views
+from envstudio.bake.pem.lookups import PLAYBACK
+from envstudio.bake.pem.views import arc_views, grid_views
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.scene_file import resolve_scene
@@ -33,6 +37,8 @@ DEFAULTS = {"views": 100, "step": 1.0, "size": 256, "samples": 4, "em_size": 64,
 def _check(args: argparse.Namespace) -> None:
     if args.env is not None:
         raise ParameterError("bake pem: --env is not used (the scene's environment is baked)")
+    if getattr(args, "elevations", 1) < 1:
+        raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
         raise ParameterError(f"--views {args.views}: expected a view count ≥ 1")
     if not (math.isfinite(args.step) and args.step > 0):
@@ -57,15 +63,22 @@ def run_bake_pem(args: argparse.Namespace) -> int:
         raise ParameterError("bake pem: --scene is required (a shipped name or a TOML file)")
     out = check_output_path(args.output)
     resolve_scene(args.scene)
+    elevations = getattr(args, "elevations", 1)
+
+    def views(camera: OrbitCamera):
+        if elevations > 1:
+            return grid_views(camera, args.views, args.step, elevations, args.elevation_step)
+        return arc_views(camera, args.views, args.step)
+
     try:
-        arc_views(OrbitCamera(), args.views, args.step)  # views that coincide, before work
+        views(OrbitCamera())  # views that coincide, elevations past ±89°: before any work
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
     with tqdm(unit="view", desc="pem", leave=False) as bar:
         try:
             report = run_bake(
                 args.scene,
-                lambda camera: arc_views(camera, args.views, args.step),
+                views,
                 out,
                 size=args.size,
                 samples=args.samples,
@@ -73,22 +86,26 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 workers=args.workers,
                 bar=bar,
                 scheduler=getattr(args, "scheduler", None),
+                lookups=getattr(args, "lookups", "auto"),
             )
-        except ValueError as exc:  # a scene without a reflector
+        except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
             raise ParameterError(str(exc)) from None
         except KeyboardInterrupt:
             folder = parts_folder(out)
             saved = len(list(folder.glob("view-*.npz"))) if folder.is_dir() else 0
             bar.write(
-                f"envstudio: {out}: not written; {saved} of {args.views} views saved in "
+                f"envstudio: {out}: not written; {saved} of {args.views * elevations} views "
+                f"saved in "
                 f"{folder}/, the same command resumes",
                 file=sys.stderr,
             )
             raise
     bake = report.bake
     resumed = f", {len(report.reused)} resumed" if report.reused else ""
+    scores = ", ".join(f"{name} {np.nanmean(bake.playback_psnr[name]):.1f}" for name in PLAYBACK)
     print(
-        f"{out}: {bake.views} views × {len(bake.parts)} parts of {bake.em_size}² box EMs "
-        f"({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s"
+        f"{out}: {bake.views} views × {len(bake.parts)} parts, {bake.em_size}² EMs in "
+        f"{bake.levels} levels ({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s; "
+        f"playback PSNR {scores} dB"
     )
     return 0

@@ -33,7 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-from envstudio.bake.pem.infer import distant_box, infer_distant, local_ellipsoid
+from envstudio.bake.pem.hull import mesh_check, reflector_hulls
+from envstudio.bake.pem.infer import distant_box, local_ellipsoid
+from envstudio.bake.pem.lookups import LOD_BIAS, MODELS, PLAYBACK, PixelLookups, pixel_lookups
+from envstudio.bake.pem.mip import mip_sizes
+from envstudio.bake.pem.models import infer_view_models, playback_psnr, predict, static_em
 from envstudio.bake.pem.pem_file import FORMAT, VERSION, PemBake, save_pem
 from envstudio.bake.pem.trace import TRACE_BOUNCES, SceneTracer
 from envstudio.bake.pem.views import ViewSpace
@@ -41,14 +45,29 @@ from envstudio.io.atomic import atomic_path, check_output_path
 from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["BakeReport", "ViewTask", "bake_view", "parts_folder", "run_bake"]
+__all__ = [
+    "DASK_CONNECT_TIMEOUT",
+    "BakeReport",
+    "ViewTask",
+    "bake_view",
+    "part_keys",
+    "parts_folder",
+    "run_bake",
+]
 
-_PART_KEYS = ("distant", "seen", "psnr", "iterations")
+#: Seconds a ``--scheduler ADDRESS`` has to answer before the bake gives up.
+DASK_CONNECT_TIMEOUT = 10.0
+
+
+def part_keys(em_size: int) -> list[str]:
+    """Names of a view's arrays (:func:`bake_view`) saved in its part file."""
+    keys = [f"{m}_{k}" for m in MODELS for k in range(len(mip_sizes(em_size)))]
+    return keys + [f"psnr_{m}" for m in MODELS] + [f"playback_{n}" for n in PLAYBACK]
 
 
 @dataclass(frozen=True)
 class ViewTask:
-    """One work unit: trace one view and infer each part's distant EM.
+    """One work unit: trace one view and infer each part's EM models, all MIP levels.
 
     Attributes
     ----------
@@ -65,9 +84,18 @@ class ViewTask:
     em_size : int
         Cube face edge n.
     smoothness : float
-        λ of :func:`~envstudio.bake.pem.infer.infer_em`.
+        λ of :func:`~envstudio.bake.pem.infer.solve_mip`.
     seed : int
         Jitter seed; the view traces with ``seed + index``.
+    tie : float
+        μ of :func:`~envstudio.bake.pem.infer.solve_mip` (coarse-to-fine ties).
+    lod_bias : float
+        Added to every lookup's MIP level (:data:`~envstudio.bake.pem.lookups.LOD_BIAS`).
+    lookups : str
+        ``gl``: the per-pixel lookups rendered by the playback shader itself
+        (bake/pem/lookups_gl.py), so that A is the playback's on this GL; ``cpu``:
+        computed from pixel-centre rays (bake/pem/lookups.py), the same up to the
+        level, which the GL takes from its own derivatives.
     """
 
     scene: str
@@ -82,6 +110,9 @@ class ViewTask:
     em_size: int
     smoothness: float
     seed: int
+    tie: float = 1e-3
+    lod_bias: float = LOD_BIAS
+    lookups: str = "gl"
 
     def camera(self) -> OrbitCamera:
         """The view's camera."""
@@ -94,18 +125,75 @@ class ViewTask:
         )
 
 
-_TRACERS: dict[str, tuple] = {}
+_CONTEXTS: dict[str, dict] = {}
 
 
-def _tracer(scene_path: str):
-    if scene_path not in _TRACERS:
+def _context(scene_path: str) -> dict:
+    """The scene, its tracer and its view-independent bake data, once per process."""
+    if scene_path not in _CONTEXTS:
         scene = load_scene(scene_path)
-        _TRACERS[scene_path] = (scene, SceneTracer(scene))
-    return _TRACERS[scene_path]
+        tracer = SceneTracer(scene)
+        local = [local_ellipsoid(tracer, p) for p in range(len(tracer.part_names))]
+        _CONTEXTS[scene_path] = {
+            "scene": scene,
+            "tracer": tracer,
+            "box": distant_box(scene),
+            "ellipsoids": [g for g, _ in local],
+            "origins": np.array([o for _, o in local]),
+            "hull": reflector_hulls(scene),
+            "static": {},
+        }
+    return _CONTEXTS[scene_path]
+
+
+def _view_lookups(ctx: dict, task: ViewTask, camera: OrbitCamera) -> PixelLookups:
+    """The playback's per-pixel lookups of the view, by ``task.lookups``."""
+    box, ellipsoids, origins = ctx["box"], ctx["ellipsoids"], ctx["origins"]
+    if task.lookups == "cpu":
+        return pixel_lookups(
+            ctx["tracer"], camera, task.size, task.em_size, box, ellipsoids, origins
+        )
+    if "gl" not in ctx:
+        from envstudio.bake.pem.lookups_gl import GlLookups
+
+        ctx["gl"] = GlLookups(ctx["scene"])  # one headless context per worker process
+    return ctx["gl"].render(
+        camera,
+        task.size,
+        task.em_size,
+        np.array([box.lo, box.hi]),
+        origins,
+        np.array([[e.centre, e.radii] for e in ellipsoids]),
+    )
+
+
+def resolve_lookups(lookups: str) -> str:
+    """``auto`` → ``gl`` when a headless GL context can be made here, else ``cpu``.
+
+    Raises
+    ------
+    ValueError
+        An unknown choice, or ``gl`` where no context can be made.
+    """
+    if lookups not in ("auto", "gl", "cpu"):
+        raise ValueError(f"--lookups {lookups}: expected auto, gl or cpu")
+    if lookups == "cpu":
+        return "cpu"
+    from envstudio.gpu.context import create_headless_context
+
+    try:
+        create_headless_context().release()
+    except Exception as exc:  # ContextError, or a driver's own error
+        if lookups == "gl":
+            raise ValueError(
+                f"--lookups gl: no GL context ({str(exc).splitlines()[0]}); use --lookups cpu"
+            ) from None
+        return "cpu"
+    return "gl"
 
 
 def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
-    """Trace one view and infer every part's distant box EM (seed 003 §4, "EM Inference").
+    """Trace one view and infer every part's EM models (seed 003 §4, bake/pem/models.py).
 
     Parameters
     ----------
@@ -115,29 +203,39 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
     Returns
     -------
     dict
-        ``distant`` (P, 6, n, n, 3) float32, ``seen`` (P, 6, n, n) uint8, ``psnr``
-        (P,) float64 (NaN for a part not in the view, whose map is 0),
-        ``iterations`` (P, 3) int32, and ``trace_seconds``, ``infer_seconds``
-        (0-d float64).
+        ``{model}_{k}`` (P, 6, n_k, n_k, C) float32 for each model of
+        :data:`~envstudio.bake.pem.lookups.MODELS` and level k (0 for a part not
+        in the view), ``psnr_{model}`` (P,) float64 fit PSNR (NaN for such a part),
+        ``playback_{name}`` 0-d float64 predicted playback PSNR for ``layered``,
+        ``sphere``, ``static``, and ``trace_seconds``, ``infer_seconds`` (0-d
+        float64; inference includes the lookups and the predictions).
     """
-    scene, tracer = _tracer(task.scene)
-    view = tracer.trace(task.camera(), task.size, task.samples, task.seed + task.index)
+    ctx = _context(task.scene)
+    tracer, n = ctx["tracer"], task.em_size
+    camera = task.camera()
+    view = tracer.trace(camera, task.size, task.samples, task.seed + task.index)
     start = time.perf_counter()
-    n, parts = task.em_size, len(tracer.part_names)
-    out = {
-        "distant": np.zeros((parts, 6, n, n, 3), np.float32),
-        "seen": np.zeros((parts, 6, n, n), np.uint8),
-        "psnr": np.full(parts, np.nan),
-        "iterations": np.zeros((parts, 3), np.int32),
-    }
-    for p in range(parts):
-        if not np.any(view.coverage[p] > 0):
-            continue
-        em = infer_distant(scene, tracer, view, p, size=n, smoothness=task.smoothness)
-        out["distant"][p] = em.em
-        out["seen"][p] = em.seen
-        out["psnr"][p] = em.psnr
-        out["iterations"][p] = em.iterations
+    lookups = _view_lookups(ctx, task, camera)
+    models = infer_view_models(
+        view,
+        lookups,
+        n,
+        ctx["hull"],
+        smoothness=task.smoothness,
+        tie=task.tie,
+        lod_bias=task.lod_bias,
+    )
+    if n not in ctx["static"]:
+        ctx["static"][n] = static_em(tracer, ctx["scene"].reflector_centre(), n)
+    predicted = predict(view, lookups, models, n, ctx["hull"], ctx["static"][n])
+    scores = playback_psnr(view, lookups, predicted)
+    out: dict[str, np.ndarray] = {}
+    for model in MODELS:
+        for k, level in enumerate(models.maps(model, n)):
+            out[f"{model}_{k}"] = level
+        out[f"psnr_{model}"] = models.psnr(model)
+    for name in PLAYBACK:
+        out[f"playback_{name}"] = np.array(scores[name], dtype=np.float64)
     out["trace_seconds"] = np.array(view.seconds)
     out["infer_seconds"] = np.array(time.perf_counter() - start)
     return out
@@ -185,7 +283,7 @@ def _bake_key(scene_path: Path, scene, parameters: dict) -> str:
 
 def _part_checksum(arrays: dict[str, np.ndarray], header: dict) -> str:
     digest = hashlib.sha256(json.dumps(header, sort_keys=True).encode())
-    for name in _PART_KEYS:
+    for name in part_keys(header["task"]["em_size"]):
         digest.update(np.ascontiguousarray(arrays[name]).tobytes())
     return digest.hexdigest()
 
@@ -195,7 +293,7 @@ def _part_header(key: str, task: ViewTask) -> dict:
 
 
 def _save_part(path: Path, key: str, task: ViewTask, result: dict) -> None:
-    arrays = {k: np.ascontiguousarray(result[k]) for k in _PART_KEYS}
+    arrays = {k: np.array(result[k], order="C") for k in part_keys(task.em_size)}
     header = _part_header(key, task)
     meta = {"header": header, "checksum": _part_checksum(arrays, header)}
     with atomic_path(path) as tmp:
@@ -208,7 +306,7 @@ def _load_part(path: Path, key: str, task: ViewTask) -> dict | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            arrays = {k: np.asarray(data[k]) for k in _PART_KEYS}
+            arrays = {k: np.asarray(data[k]) for k in part_keys(task.em_size)}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         return None
     header = _part_header(key, task)
@@ -248,35 +346,47 @@ def _map_local(tasks, workers: int):
     pool.shutdown(wait=True)
 
 
-def _map_dask(tasks, scheduler: str):
-    """Yield (task, result) as views finish on a Dask cluster (``"local"``: a LocalCluster)."""
+def _dask_client(scheduler: str, timeout: float, workers: int = 2):
+    """(client, cluster or None): a new LocalCluster for ``"local"``, else the scheduler's.
+
+    Raises
+    ------
+    ValueError
+        One line: distributed is not installed, or no scheduler answered at the
+        address within ``timeout`` seconds.
+    """
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - the cluster extra is in the lock
         raise ValueError(
             "a Dask bake needs dask and distributed: pip install 'envmap-studio[cluster]'"
         ) from None
-    cluster = None
     if scheduler == "local":
         # worker processes start with spawn (distributed's default): no fork after Embree
         cluster = LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
         )
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
+        return Client(cluster), cluster
     try:
-        futures = {client.submit(bake_view, t, pure=False): t for t in tasks}
-        try:
-            for future in as_completed(futures):
-                yield futures[future], future.result()
-        except BaseException:
-            client.cancel(list(futures))
-            raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        return Client(scheduler, timeout=timeout), None
+    except (OSError, TimeoutError, ValueError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(
+            f"--scheduler {scheduler}: no Dask scheduler answered within {timeout:g} s ({reason})"
+        ) from None
+
+
+def _map_dask(tasks, client):
+    """Yield (task, result) as views finish on a Dask cluster."""
+    from dask.distributed import as_completed
+
+    futures = {client.submit(bake_view, t, pure=False): t for t in tasks}
+    try:
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    except BaseException:
+        client.cancel(list(futures))
+        raise
 
 
 def run_bake(
@@ -292,6 +402,11 @@ def run_bake(
     on_view: Callable[[int, dict], None] | None = None,
     bar=None,
     scheduler: str | None = None,
+    tie: float | None = None,
+    connect_timeout: float | None = None,
+    dask_workers: int = 2,
+    lod_bias: float = LOD_BIAS,
+    lookups: str = "auto",
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -305,7 +420,8 @@ def run_bake(
     output
         The ``.pem`` path; its folder must exist.
     size, samples, em_size, smoothness, seed
-        Trace resolution R, rays per pixel, cube face edge n, λ, jitter seed.
+        Trace resolution R, rays per pixel, finest cube face edge n (all levels
+        n >> k down to 1 are inferred), λ, jitter seed.
     workers
         Processes of the local pool; 0 bakes in this process; None: one per core,
         at most one per view.
@@ -318,6 +434,22 @@ def run_bake(
         ignored): a scheduler address (``tcp://host:8786``), or ``"local"`` to start
         a ``LocalCluster`` (two worker processes, one thread each) and close it
         after. One future per unfinished view; parts are saved as they complete.
+        An address that does not answer within ``connect_timeout`` seconds
+        (default :data:`DASK_CONNECT_TIMEOUT`) raises a one-line ValueError before
+        anything is written.
+    tie
+        μ, the coarse-to-fine MIP ties (default: ``smoothness``).
+    connect_timeout
+        See ``scheduler``.
+    dask_workers
+        Worker processes of the ``"local"`` cluster.
+    lod_bias
+        Added to every lookup's level; stored as ``parameters["lod_bias"]`` for the
+        playback to add too.
+    lookups
+        ``auto`` (GL when a context can be made, else CPU), ``gl`` or ``cpu``: where
+        the per-pixel lookups A is built from come from (:class:`ViewTask`); stored
+        as ``parameters["lookups"]``.
 
     Returns
     -------
@@ -329,15 +461,22 @@ def run_bake(
     scene_obj = load_scene(scene_path)
     tracer = SceneTracer(scene_obj)  # raises ValueError for a scene without a reflector
     space = views if isinstance(views, ViewSpace) else views(scene_obj.camera)
+    tie = float(smoothness if tie is None else tie)
+    lookups = resolve_lookups(lookups)
     parameters = {
         "size": int(size),
         "samples": int(samples),
         "em_size": int(em_size),
+        "levels": len(mip_sizes(int(em_size))),
         "smoothness": float(smoothness),
+        "tie": tie,
+        "lod_bias": float(lod_bias),
         "seed": int(seed),
         "bounces": TRACE_BOUNCES,
-        "layer": "distant",
-        "geometry": "box",
+        "geometries": {"distant": "box", "local": "ellipsoid", "sphere": "infinity"},
+        "lookup": "pixel centre, trilinear (bake/pem/lookups.py)",
+        "lookups": lookups,
+        "hull": "convex hull of all reflector parts",
     }
     key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
     tasks = [
@@ -354,11 +493,13 @@ def run_bake(
             int(em_size),
             float(smoothness),
             int(seed),
+            tie,
+            float(lod_bias),
+            lookups,
         )
         for i, c in enumerate(space.cameras())
     ]
     folder = parts_folder(output)
-    folder.mkdir(exist_ok=True)
     results: dict[int, dict] = {}
     report = BakeReport(bake=None, path=output)  # type: ignore[arg-type]
     for task in tasks:
@@ -367,51 +508,70 @@ def run_bake(
             results[task.index] = part
             report.reused.append(task.index)
     todo = [t for t in tasks if t.index not in results]
-    if bar is not None:
-        bar.total, bar.initial, bar.n = len(tasks), len(results), len(results)
-        bar.refresh()
-    count = min(os.cpu_count() or 1, len(todo)) if workers is None else int(workers)
-    if scheduler is not None and todo:
-        finished = _map_dask(todo, scheduler)
-    else:
-        finished = _map_local(todo, max(0, min(count, len(todo))))
-    for task, result in finished:
-        _save_part(folder / f"view-{task.index:05d}.npz", key, task, result)
-        results[task.index] = {k: result[k] for k in _PART_KEYS}
-        report.baked.append(task.index)
-        report.trace_seconds.append(float(result["trace_seconds"]))
-        report.infer_seconds.append(float(result["infer_seconds"]))
+    client = cluster = None
+    if scheduler is not None and todo:  # before anything is written: it may not answer
+        timeout = DASK_CONNECT_TIMEOUT if connect_timeout is None else float(connect_timeout)
+        client, cluster = _dask_client(scheduler, timeout, dask_workers)
+    try:
+        folder.mkdir(exist_ok=True)
         if bar is not None:
-            bar.set_postfix_str(
-                f"view {task.index}: trace {float(result['trace_seconds']):.1f} s, "
-                f"infer {float(result['infer_seconds']):.1f} s"
-            )
-            bar.update(1)
-        if on_view is not None:
-            on_view(task.index, result)
-    box = distant_box(scene_obj)
+            bar.total, bar.initial, bar.n = len(tasks), len(results), len(results)
+            bar.refresh()
+        count = min(os.cpu_count() or 1, len(todo)) if workers is None else int(workers)
+        if client is not None:
+            finished = _map_dask(todo, client)
+        else:
+            finished = _map_local(todo, max(0, min(count, len(todo))))
+        keys = part_keys(int(em_size))
+        for task, result in finished:
+            _save_part(folder / f"view-{task.index:05d}.npz", key, task, result)
+            results[task.index] = {k: result[k] for k in keys}
+            report.baked.append(task.index)
+            report.trace_seconds.append(float(result["trace_seconds"]))
+            report.infer_seconds.append(float(result["infer_seconds"]))
+            if bar is not None:
+                bar.set_postfix_str(
+                    f"view {task.index}: trace {float(result['trace_seconds']):.1f} s, "
+                    f"infer {float(result['infer_seconds']):.1f} s"
+                )
+                bar.update(1)
+            if on_view is not None:
+                on_view(task.index, result)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    bake = _assemble(scene_obj, tracer, space, parameters, tasks, results, int(em_size))
+    save_pem(output, bake)
+    shutil.rmtree(folder, ignore_errors=True)
+    report.bake = bake
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _assemble(scene, tracer, space, parameters, tasks, results, em_size) -> PemBake:
+    """The :class:`PemBake` of every view's part arrays, in view order."""
+    box = distant_box(scene)
     ellipsoids, origins = [], []
     for p in range(len(tracer.part_names)):
         geometry, origin = local_ellipsoid(tracer, p)
         ellipsoids.append([geometry.centre, geometry.radii])
         origins.append(origin)
     order = [results[t.index] for t in tasks]
-    bake = PemBake(
-        scene=scene_obj.name,
+    levels = range(len(mip_sizes(em_size)))
+    return PemBake(
+        scene=scene.name,
         view_space=space.describe(),
         parts=list(tracer.part_names),
         parameters=parameters,
-        distant=np.stack([r["distant"] for r in order]),
-        seen=np.stack([r["seen"] for r in order]),
-        psnr=np.stack([r["psnr"] for r in order]),
-        iterations=np.stack([r["iterations"] for r in order]),
+        maps={m: [np.stack([r[f"{m}_{k}"] for r in order]) for k in levels] for m in MODELS},
+        hull=reflector_hulls(scene),
+        mesh_checks=[mesh_check(node) for node in scene.reflectors()],
+        psnr={m: np.stack([r[f"psnr_{m}"] for r in order]) for m in MODELS},
+        playback_psnr={n: np.array([float(r[f"playback_{n}"]) for r in order]) for n in PLAYBACK},
         cameras=np.array([[t.azimuth, t.elevation] for t in tasks], dtype=np.float64),
         box=np.stack([box.lo, box.hi]),
         origins=np.array(origins, dtype=np.float64),
         ellipsoids=np.array(ellipsoids, dtype=np.float64),
     )
-    save_pem(output, bake)
-    shutil.rmtree(folder, ignore_errors=True)
-    report.bake = bake
-    report.seconds = time.perf_counter() - start
-    return report

@@ -11,7 +11,8 @@ D is the texel-difference operator of the cube map (the "smoothness"
 regularisation that fills non-contributing texels from their neighbours, §4
 citing [10]). The normal equations (AᵀA + λ DᵀD) x = Aᵀb are solved per colour
 channel by conjugate gradient (:func:`scipy.sparse.linalg.cg`, Jacobi
-preconditioned); the range term is applied as a clip of the solution to x ≥ 0.
+preconditioned); in :func:`infer_em` the range term is a clip of the solution
+to x ≥ 0, in :func:`solve_mip` bounds kept by an active set.
 
 EM geometries (§4, "EM Representations", "Layered EMs")
 -------------------------------------------------------
@@ -38,20 +39,35 @@ bilinearly weighted over the four nearest texels of its cube face (texel centres
 at ((j + ½)/n, (i + ½)/n), clamped to the face edge as ``GL_CLAMP_TO_EDGE``
 samples a face). A pixel's row is the mean of its part samples' weights, the same
 mean the tracer takes for the distant layer, so the rows of covered pixels sum to 1.
-This is the finest MIP level only; the playback shader's level selection and
-trilinear weights are not modelled yet (docs/pem/README.md).
+This per-sample, finest-level matrix (:func:`rendering_matrix`, :func:`infer_em`,
+:func:`infer_distant`) is the single-level check of the solve; the bake itself
+uses the playback's lookups (one per pixel, trilinear over every level:
+:mod:`envstudio.bake.pem.lookups`) and solves all levels at once.
+
+All MIP levels at once (§4, "EM MIPMAPs")
+-----------------------------------------
+:func:`solve_mip` solves (AᵀA + λ DᵀD + μ TᵀT) x = Aᵀb for the concatenated
+levels x, D the seam-crossing smoothness of each level (block diagonal) and T
+:func:`mip_ties` (each coarse texel against the 2 × 2 mean of the level below,
+weak, so levels nothing looks up are defined), with range bounds kept by an
+active set (:func:`bounded_cg`). :func:`infer_mip` wraps it for one layer;
+:func:`infer_local_over` fits the local layer's premultiplied RGBA through the
+"over" with the inferred distant layer.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
 from scipy import sparse
 from scipy.sparse import linalg as splinalg
+from threadpoolctl import threadpool_limits
 
+from envstudio.bake.pem.mip import level_offsets, mip_sizes
 from envstudio.bake.pem.trace import SceneTracer, TracedView
 from envstudio.core.cubemap import direction_to_uv, uv_to_direction
 from envstudio.scene.graph import Scene
@@ -60,17 +76,24 @@ __all__ = [
     "BoxGeometry",
     "EMInference",
     "EllipsoidGeometry",
+    "MipInference",
+    "bounded_cg",
     "cube_bilinear",
     "distant_box",
     "em_origin",
     "infer_distant",
     "infer_em",
+    "infer_local_over",
+    "infer_mip",
     "local_ellipsoid",
     "min_volume_ellipsoid",
+    "mip_regulariser",
+    "mip_ties",
     "part_triangles",
     "psnr",
     "rendering_matrix",
     "smoothness_operator",
+    "solve_mip",
 ]
 
 
@@ -630,3 +653,342 @@ def infer_distant(
     return infer_em(
         view, part, view.distant[part], distant_box(scene), origin, size, smoothness, **kw
     )
+
+
+# -- all MIP levels at once (seed 003 §4, "EM MIPMAPs") ------------------------------------
+
+
+def mip_ties(size: int, levels: int | None = None) -> sparse.csr_matrix:
+    """Coarse-to-decimated-fine differences of a MIP chain.
+
+    One row per texel of levels k ≥ 1: x_k[f, i, j] − ¼ Σ_{a,b∈{0,1}}
+    x_{k−1}[f, 2i + a, 2j + b], over the chain's concatenated unknowns
+    (:func:`envstudio.bake.pem.mip.level_offsets`). It ties a level nothing looks
+    up to the box filter of the level below (and a fine level nothing looks up to
+    the coarse one), so every level is defined; it is weak (μ) and does not make
+    levels decimated copies of each other, which §4 finds they are not.
+
+    Returns
+    -------
+    (Σ_{k≥1} 6 n_k², Σ_k 6 n_k²) scipy.sparse.csr_matrix
+    """
+    sizes = mip_sizes(size, levels)
+    offsets = level_offsets(size, levels)
+    rows, cols, vals = [], [], []
+    start = 0
+    for k in range(1, len(sizes)):
+        n, fine = sizes[k], sizes[k - 1]
+        f, i, j = (
+            a.ravel() for a in np.meshgrid(np.arange(6), np.arange(n), np.arange(n), indexing="ij")
+        )
+        row = start + f * n * n + i * n + j
+        rows.append(row)
+        cols.append(offsets[k] + f * n * n + i * n + j)
+        vals.append(np.ones(len(row)))
+        for a in (0, 1):
+            for b in (0, 1):
+                rows.append(row)
+                cols.append(offsets[k - 1] + f * fine * fine + (2 * i + a) * fine + 2 * j + b)
+                vals.append(np.full(len(row), -0.25))
+        start += 6 * n * n
+    total = int(offsets[-1])
+    if start == 0:
+        return sparse.csr_matrix((0, total))
+    return sparse.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(start, total)
+    )
+
+
+@lru_cache(maxsize=16)
+def mip_regulariser(size: int, levels: int, smoothness: float, tie: float) -> sparse.csr_matrix:
+    """λ DᵀD + μ TᵀT over a chain: D the seam-crossing smoothness per level
+    (:func:`smoothness_operator`, block diagonal), T :func:`mip_ties` (cached)."""
+    blocks = [smoothness_operator(n) for n in mip_sizes(size, levels)]
+    D = sparse.block_diag(blocks, format="csr")
+    T = mip_ties(size, levels)
+    return (smoothness * (D.T @ D) + tie * (T.T @ T)).tocsr()
+
+
+def bounded_cg(
+    M: sparse.csr_matrix,
+    rhs: npt.ArrayLike,
+    x0: npt.ArrayLike,
+    lo: npt.ArrayLike,
+    hi: npt.ArrayLike,
+    rtol: float = 1e-6,
+    maxiter: int = 3000,
+    active_rounds: int = 2,
+) -> tuple[np.ndarray, int]:
+    """Solve M x = rhs (M symmetric positive semi-definite) with lo ≤ x ≤ hi by an active set.
+
+    Jacobi-preconditioned CG; the entries a solve puts out of range are fixed at
+    the bound and the others re-solved, warm started, at most ``active_rounds``
+    times; the result is clipped. ``lo`` and ``hi`` are scalars or per entry.
+    BLAS runs on one thread meanwhile: CG's many short dot products are ten
+    times slower when BLAS threads contend for loaded cores (measured here:
+    30 s against 3 s for one 256² view).
+
+    Returns
+    -------
+    x : (N,) float64
+    iterations : int
+        CG iterations, all rounds.
+    """
+    n = M.shape[0]
+    lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), n)
+    hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), n)
+    diag = M.diagonal()
+    inv = np.where(diag > 0, 1.0 / np.where(diag > 0, diag, 1.0), 1.0)
+    x = np.clip(np.asarray(x0, dtype=np.float64), lo, hi)
+    rhs = np.asarray(rhs, dtype=np.float64)
+    fixed = np.zeros(n, bool)
+    count = [0]
+
+    def tick(_xk):
+        count[0] += 1
+
+    with threadpool_limits(1):  # CG's dot products: BLAS threads only contend here
+        for _ in range(active_rounds + 1):
+            x, fixed, done = _bounded_round(M, rhs, x, fixed, inv, lo, hi, rtol, maxiter, tick)
+            if done:
+                break
+    return x, count[0]
+
+
+def _bounded_round(M, rhs, x, fixed, inv, lo, hi, rtol, maxiter, tick):
+    """One active-set round of :func:`bounded_cg`: (x, fixed, nothing left out of range)."""
+    free = np.flatnonzero(~fixed)
+    rows = M[free]
+    Mf = rows[:, free]
+    rf = rhs[free] - rows[:, np.flatnonzero(fixed)] @ x[fixed]
+    pre = splinalg.LinearOperator(Mf.shape, matvec=lambda v, d=inv[free]: d * v, dtype=np.float64)
+    sol, info = splinalg.cg(
+        Mf, rf, x0=x[free], rtol=rtol, atol=0.0, maxiter=maxiter, M=pre, callback=tick
+    )
+    if info < 0:
+        raise RuntimeError(f"conjugate gradient broke down (info {info})")
+    x[free] = sol
+    out_of_range = (x < lo) | (x > hi)
+    x = np.clip(x, lo, hi)
+    return x, fixed | out_of_range, not out_of_range[free].any()
+
+
+def solve_mip(
+    A: sparse.spmatrix,
+    b: npt.ArrayLike,
+    size: int,
+    levels: int | None = None,
+    smoothness: float = 1e-3,
+    tie: float = 1e-3,
+    lo: npt.ArrayLike = 0.0,
+    hi: npt.ArrayLike = np.inf,
+    rtol: float = 1e-6,
+    maxiter: int = 3000,
+    active_rounds: int = 2,
+) -> tuple[list[np.ndarray], list[int]]:
+    """Every MIP level of an EM from one least-squares solve (seed 003 §4, "EM MIPMAPs").
+
+    Solves (AᵀA + λ DᵀD + μ TᵀT) x = Aᵀ b per channel by Jacobi-preconditioned
+    conjugate gradient, x the concatenated levels. The range terms (RGB ≥ 0,
+    alpha in [0, 1]) are bounds kept by an active set: texels a solve puts out
+    of [lo, hi] are fixed at the bound and the others re-solved, warm started,
+    for at most ``active_rounds`` rounds, then a final clip. (A plain clip after
+    one solve costs 2–6 dB on ``room``: unbounded, the levels trade positive
+    texels against negative ones.)
+
+    Parameters
+    ----------
+    A
+        (m, Σ_k 6 n_k²) rendering matrix of the fitted pixels
+        (:func:`envstudio.bake.pem.lookups.trilinear_matrix`).
+    b
+        (m, C) the layer at those pixels.
+    size, levels
+        n and L of the chain (L default: the full chain).
+    smoothness, tie
+        λ and μ (:func:`mip_regulariser`); A's rows sum to 1, so both are relative to
+        one pixel's squared error.
+    lo, hi
+        Range per channel: scalars or (C,).
+    rtol, maxiter
+        CG stopping rule (per round).
+    active_rounds
+        Re-solves with the out-of-range texels fixed (0: one solve and a clip).
+
+    Returns
+    -------
+    levels : list of (6, n_k, n_k, C) float64
+    iterations : list of int
+        CG iterations per channel, all rounds.
+    """
+    sizes = mip_sizes(size, levels)
+    offsets = level_offsets(size, len(sizes))
+    b = np.asarray(b, dtype=np.float64)
+    b = b.reshape(len(b), -1)
+    if A.shape != (len(b), offsets[-1]):
+        raise ValueError(f"A is {A.shape}, expected ({len(b)}, {offsets[-1]}) for this chain")
+    if len(b) == 0:
+        raise ValueError("no pixel to fit")
+    A = sparse.csr_matrix(A)
+    M = (A.T @ A + mip_regulariser(size, len(sizes), float(smoothness), float(tie))).tocsr()
+    rhs = A.T @ b
+    x = np.zeros((M.shape[0], b.shape[1]))
+    lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), b.shape[1])
+    hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), b.shape[1])
+    iterations = []
+    for c in range(b.shape[1]):
+        start = np.full(M.shape[0], float(np.clip(b[:, c].mean(), lo[c], hi[c])))
+        x[:, c], count = bounded_cg(M, rhs[:, c], start, lo[c], hi[c], rtol, maxiter, active_rounds)
+        iterations.append(count)
+    out = [x[offsets[k] : offsets[k + 1]].reshape(6, n, n, -1) for k, n in enumerate(sizes)]
+    return out, iterations
+
+
+@dataclass
+class MipInference:
+    """An EM's inferred MIP chain for one part and model (seed 003 §4, "EM MIPMAPs").
+
+    Attributes
+    ----------
+    levels : list of (6, n_k, n_k, C) float64
+        Level k has edge n >> k, OpenGL face order (core/cubemap.py).
+    matrix : (R², Σ_k 6 n_k²) scipy.sparse.csr_matrix
+        The trilinear rendering matrix of every pixel of the part (``PixelLookups.matrix``).
+    pixels : (R²,) bool
+        The fitted pixels.
+    target : (k, C) float64
+        b at those pixels.
+    psnr : float
+        A x against b over the fitted pixels, dB (peak = max b).
+    iterations : list of int
+        CG iterations per channel.
+    seconds : float
+        Wall time of the solve.
+    """
+
+    levels: list[np.ndarray]
+    matrix: sparse.csr_matrix
+    pixels: np.ndarray
+    target: np.ndarray
+    psnr: float = 0.0
+    iterations: list[int] = field(default_factory=list)
+    seconds: float = 0.0
+
+    def flat(self) -> np.ndarray:
+        """(Σ_k 6 n_k², C) the concatenated levels, as the matrix's columns order them."""
+        return np.concatenate([lv.reshape(-1, lv.shape[-1]) for lv in self.levels])
+
+    def render(self) -> np.ndarray:
+        """(R², C) A x for every row of the matrix (0 off the part's pixels)."""
+        return self.matrix @ self.flat()
+
+
+def infer_mip(
+    A: sparse.spmatrix,
+    pixels: npt.ArrayLike,
+    layer: npt.ArrayLike,
+    size: int,
+    levels: int | None = None,
+    smoothness: float = 1e-3,
+    tie: float = 1e-3,
+    lo: npt.ArrayLike = 0.0,
+    hi: npt.ArrayLike = np.inf,
+    **kw,
+) -> MipInference:
+    """Infer a MIP chain so that A x matches ``layer`` on ``pixels`` (:func:`solve_mip`).
+
+    Parameters
+    ----------
+    A
+        (R², Σ 6 n_k²) trilinear rendering matrix of all pixels.
+    pixels
+        (R²,) or (R, R) bool, the pixels to fit.
+    layer
+        (R, R, C) or (R², C) float, b.
+    size, levels, smoothness, tie, lo, hi
+        As :func:`solve_mip`; other keywords go to it too.
+
+    Returns
+    -------
+    MipInference
+    """
+    start = time.perf_counter()
+    A = sparse.csr_matrix(A)
+    pixels = np.asarray(pixels, dtype=bool).ravel()
+    b_all = np.asarray(layer, dtype=np.float64)
+    b_all = b_all.reshape(len(pixels), -1)
+    b = b_all[pixels]
+    if len(b) == 0:
+        raise ValueError("no pixel to fit")
+    lv, iterations = solve_mip(A[pixels], b, size, levels, smoothness, tie, lo, hi, **kw)
+    result = MipInference(lv, A, pixels, b, iterations=iterations)
+    result.psnr = psnr(result.render()[pixels], b)
+    result.seconds = time.perf_counter() - start
+    return result
+
+
+def infer_local_over(
+    A: sparse.spmatrix,
+    pixels: npt.ArrayLike,
+    incident: npt.ArrayLike,
+    distant: npt.ArrayLike,
+    alpha: npt.ArrayLike,
+    size: int,
+    levels: int | None = None,
+    smoothness: float = 1e-3,
+    tie: float = 1e-3,
+    **kw,
+) -> MipInference:
+    """The local layer's premultiplied RGBA chain, fitted through the "over" (seed 003 §4).
+
+    The playback composites I = rgb_L + (1 − α_L)·I_D, I_D = A_D x_D the distant
+    chain's lookup (inferred first). Two linear solves (:func:`solve_mip`):
+
+    1. α: A x_α ≈ α_L, the traced local coverage, in [0, 1];
+    2. rgb: A x_c ≈ I_c − (1 − A x_α)·I_D,c per channel, ≥ 0,
+
+    so the colour makes up for what the fitted α and the fitted distant layer
+    miss of the traced I. With α and D exact the rgb target is α_L·L, the
+    premultiplied b = (α_L·L, α_L) of the brief.
+
+    Parameters
+    ----------
+    A
+        (R², Σ 6 n_k²) trilinear matrix of the local model.
+    pixels
+        (R²,) bool fitted pixels.
+    incident, distant
+        (R², 3) the traced I and I_D at every pixel.
+    alpha
+        (R²,) the traced α_L (0 on convex-hull pixels).
+    size, levels, smoothness, tie
+        As :func:`solve_mip`; other keywords go to it too.
+
+    Returns
+    -------
+    MipInference
+        ``target`` (k, 4): the rgb targets of step 2 and α_L; ``psnr`` that of the
+        composite I = rgb + (1 − α)·I_D against the traced I over the pixels.
+    """
+    start = time.perf_counter()
+    A = sparse.csr_matrix(A)
+    pixels = np.asarray(pixels, bool).ravel()
+    Ap = A[pixels]
+    if Ap.shape[0] == 0:
+        raise ValueError("no pixel to fit")
+    inc = np.asarray(incident, np.float64).reshape(-1, 3)[pixels]
+    dist = np.asarray(distant, np.float64).reshape(-1, 3)[pixels]
+    a = np.asarray(alpha, np.float64).ravel()[pixels]
+    x_a, it_a = solve_mip(Ap, a[:, None], size, levels, smoothness, tie, 0.0, 1.0, **kw)
+    flat_a = np.concatenate([lv.reshape(-1, 1) for lv in x_a])
+    a_hat = (Ap @ flat_a)[:, 0]
+    rgb_target = inc - (1.0 - a_hat)[:, None] * dist
+    x_rgb, it_rgb = solve_mip(Ap, rgb_target, size, levels, smoothness, tie, 0.0, np.inf, **kw)
+    chain = [np.concatenate([c, al], axis=-1) for c, al in zip(x_rgb, x_a, strict=True)]
+    result = MipInference(
+        chain, A, pixels, np.column_stack([rgb_target, a]), iterations=it_rgb + it_a
+    )
+    loc = result.render()[pixels]
+    result.psnr = psnr(loc[:, :3] + (1.0 - loc[:, 3:]) * dist, inc)
+    result.seconds = time.perf_counter() - start
+    return result

@@ -158,6 +158,34 @@ class TracedView:
         return self.background + np.einsum("pij,pijc->ijc", self.coverage, self.part_images())
 
 
+def camera_rays(camera: OrbitCamera, size: int, col, row):
+    """Camera rays through image points (col, row) of an R × R image (row 0 at the top).
+
+    Parameters
+    ----------
+    camera
+        Pinhole camera (``fov_y``, aspect 1).
+    size
+        R.
+    col, row
+        (k,) float image coordinates in pixels; a pixel's centre is at + 0.5.
+
+    Returns
+    -------
+    origins, directions : (k, 3) float64
+        The camera position, and unit directions.
+    """
+    col, row = np.asarray(col, dtype=np.float64), np.asarray(row, dtype=np.float64)
+    view = camera.view_matrix().astype(np.float64)
+    side, up, back = view[0, :3], view[1, :3], view[2, :3]
+    half = np.tan(np.radians(camera.fov_y) / 2.0)
+    x = (col / size * 2.0 - 1.0) * half
+    y = (1.0 - row / size * 2.0) * half
+    d = x[:, None] * side + y[:, None] * up - back
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return np.broadcast_to(camera.position, d.shape).astype(np.float64), d
+
+
 class SceneTracer:
     """A scene's triangles in Embree, ready to trace views (GL-free).
 
@@ -204,6 +232,11 @@ class SceneTracer:
         self.normals = np.concatenate(normals)
         #: (m,) int64 reflector part of each triangle, −1 for local objects.
         self.part = np.concatenate(part)
+        #: (P,) int64 index of each part's first triangle: a part's triangles are
+        #: contiguous, in the order of its node's mesh faces.
+        self.part_start = np.array(
+            [np.flatnonzero(self.part == p)[0] for p in range(len(reflectors))], dtype=np.int64
+        )
         #: (m, 3) float64 albedo of local triangles.
         self.albedo = np.concatenate(albedo)
         extent = np.ptp(self.positions.reshape(-1, 3), axis=0)
@@ -343,14 +376,20 @@ class SceneTracer:
         else:
             jitter = rng.random((len(pix), 2))
         col, row = pix % size + jitter[:, 0], pix // size + jitter[:, 1]
-        view = camera.view_matrix().astype(np.float64)
-        side, up, back = view[0, :3], view[1, :3], view[2, :3]
-        half = np.tan(np.radians(camera.fov_y) / 2.0)
-        x = (col / size * 2.0 - 1.0) * half
-        y = (1.0 - row / size * 2.0) * half
-        d = x[:, None] * side + y[:, None] * up - back
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
-        return pix, np.broadcast_to(camera.position, d.shape).copy(), d
+        return (pix, *camera_rays(camera, size, col, row))
+
+    def centre_rays(self, camera: OrbitCamera, size: int):
+        """One ray through each pixel centre (column + ½, row + ½), as the playback samples.
+
+        Returns
+        -------
+        pixels : (R·R,) int64
+            row·R + column.
+        origins, directions : (R·R, 3) float64
+            As :meth:`primary_rays`.
+        """
+        pix = np.arange(size * size)
+        return (pix, *camera_rays(camera, size, pix % size + 0.5, pix // size + 0.5))
 
     def trace(self, camera: OrbitCamera, size: int = 256, samples: int = 4, seed: int = 0):
         """Trace one view into its segmented layers.

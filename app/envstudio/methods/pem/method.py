@@ -276,6 +276,7 @@ class PemMethod(Method):
         set_uniform(program, "u_hull_width", loaded.textures.width)
         set_uniform(program, "u_em_size", bake.em_size)
         set_uniform(program, "u_em_levels", len(bake.maps["distant"]))
+        set_uniform(program, "u_lod_bias", float(bake.parameters.get("lod_bias", 0.0)))
         set_uniform(program, "u_box_lo", bake.box[0])
         set_uniform(program, "u_box_hi", bake.box[1])
         model = MODELS.index(str(self.values["em_model"]))

@@ -7,7 +7,9 @@ PEM and a static EM at views the bake never sampled. :func:`measure` renders
 bake's own tracer, bake/pem/trace.py, whose composite is the ground truth of the
 playback), over the pixels the reflector covers fully: PSNR and FLIP of the
 displayed images (core/metrics.py, as ``compare``) and the linear PSNR of the
-bake's numbers (peak = the trace's maximum there). :func:`wobble` is §6's
+bake's numbers (peak = the trace's maximum there); the pixels are those one part
+covers fully (the bake's interior pixels, where playback and trace see the same
+surface). :func:`wobble` is §6's
 temporal-stability measure: the mean absolute change of the reflector's pixels
 between consecutive frames of a slow camera sweep, per model and for the traced
 frames.
@@ -160,7 +162,7 @@ def measure(
     for view in views:
         camera = _camera(space, view)
         traced = tracer.trace(camera, size, samples, seed)
-        mask = traced.coverage.sum(axis=0) >= 1.0 - 1e-6
+        mask = (traced.coverage >= 1.0 - 1e-6).any(axis=0)
         reference = traced.composite.astype(np.float64)
         result = ViewResult(view, pixels=int(mask.sum()))
         result.images["trace"] = to_ldr(reference, exposure, tonemap)
@@ -223,7 +225,7 @@ def wobble(
         view = OffManifoldView(f"sweep {k}", start + k * step, elevation)
         camera = _camera(space, view)
         traced = tracer.trace(camera, size, samples, seed=11)  # one jitter: no noise flicker
-        masks.append(traced.coverage.sum(axis=0) >= 1.0 - 1e-6)
+        masks.append((traced.coverage >= 1.0 - 1e-6).any(axis=0))
         images["trace"].append(to_ldr(traced.composite, exposure, tonemap) / 255.0)
         for model in MODELS:
             shown = to_ldr(_render(session, method, camera, size, model), exposure, tonemap)

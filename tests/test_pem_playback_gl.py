@@ -1,0 +1,214 @@
+"""Method ``pem`` (issue 19): playback equals the bake's rendering matrix, texgen, bad input.
+
+The bake infers maps x through A, the trilinear lookups the playback shader makes
+(bake/pem/lookups.py); a playback that drew anything else would not reproduce
+A·x. Here random multi-level maps are played back at a sampled view and
+compared with A·x over every reflector pixel, A built from the lookups the
+playback shader writes (bake/pem/lookups_gl.py).
+"""
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from envstudio.bake.pem.infer import BoxGeometry, EllipsoidGeometry, distant_box, local_ellipsoid
+from envstudio.bake.pem.lookups import CHANNELS, MODELS
+from envstudio.bake.pem.lookups_gl import GlLookups
+from envstudio.bake.pem.mip import mip_sizes
+from envstudio.bake.pem.trace import SceneTracer
+from envstudio.errors import InputFileError
+from envstudio.gpu.fullscreen import FullscreenPass
+from envstudio.io.scene_file import load_scene
+from envstudio.methods.pem.atlas import flat_maps
+from envstudio.render.session import RenderSession
+
+R, N = 48, 8
+LOD_BIAS = -1.0  # a bake's level bias (bake/pem/lookups.py): the playback adds it too
+
+
+@pytest.fixture(scope="module")
+def room():
+    scene = load_scene("room")
+    tracer = SceneTracer(scene)
+    ellipsoids = [local_ellipsoid(tracer, p) for p in range(len(tracer.part_names))]
+    return scene, distant_box(scene), ellipsoids
+
+
+def _fake_bake(scene, box, ellipsoids, views=2, seed=0, hull_share=0.0):
+    """A bake of random maps (every level) on a 2-view arc about the scene camera."""
+    rng = np.random.default_rng(seed)
+    parts = [n.name for n in scene.reflectors()]
+    sizes = mip_sizes(N)
+    maps = {}
+    for model in MODELS:
+        levels = []
+        for nk in sizes:
+            a = rng.uniform(0.1, 1.0, (views, len(parts), 6, nk, nk, CHANNELS[model]))
+            if model == "local":
+                a[..., 3] = rng.uniform(0.0, 1.0, a.shape[:-1])
+                a[..., :3] *= a[..., 3:]  # premultiplied
+            levels.append(a.astype(np.float32))
+        maps[model] = levels
+    cam = scene.camera
+    return SimpleNamespace(
+        scene=scene.name,
+        parts=parts,
+        view_space={
+            "kind": "arc",
+            "azimuths": [cam.azimuth + 2.0 * k for k in range(views)],
+            "elevations": [cam.elevation],
+            "distance": cam.distance,
+            "target": [float(t) for t in cam.target],
+            "fov_y": cam.fov_y,
+        },
+        maps=maps,
+        hull=[rng.random(n.mesh.triangle_count) < hull_share for n in scene.reflectors()],
+        box=np.array([box.lo, box.hi]),
+        origins=np.array([o for _, o in ellipsoids]),
+        ellipsoids=np.array([[e.centre, e.radii] for e, _ in ellipsoids]),
+        em_size=N,
+        views=views,
+        parameters={"lod_bias": LOD_BIAS},
+        header={},
+    )
+
+
+def _play(gl_ctx, scene, bake, **values):
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.show(bake, session.gpu_scene, Path("fake.pem"))
+    method.values.update({"snap": True, "kd": 0.0, "fresnel_layer": False, **values})
+    session.renderer.display["background"] = False
+    session.render_offscreen(method, (R, R))
+    return session, method, session.read_hdr().astype(np.float64)
+
+
+def _expected(
+    gl_ctx, scene, bake, camera, view_weights, hull=False, model="layered", texgen="fragment"
+):
+    """A·x per pixel from the playback shader's own lookups (the bake's matrix)."""
+    lookups = GlLookups(scene, ctx=gl_ctx, texgen=texgen).render(
+        camera, R, N, bake.box, bake.origins, bake.ellipsoids
+    )
+    flat = {m: flat_maps(bake.maps[m]).reshape(bake.views, len(bake.parts), -1, 4) for m in MODELS}
+    out = np.zeros((R * R, 3))
+    for p in range(len(bake.parts)):
+        on = lookups.part.ravel() == p
+        for v, w in view_weights:
+            if model == "sphere":
+                a = lookups.matrix("sphere", p, lod_bias=LOD_BIAS)
+                incident = a @ flat["sphere"][v, p, :, :3]
+            else:
+                distant = (
+                    lookups.matrix("distant", p, lod_bias=LOD_BIAS) @ flat["distant"][v, p, :, :3]
+                )
+                local = lookups.matrix("local", p, lod_bias=LOD_BIAS) @ flat["local"][v, p]
+                if hull:
+                    tri = lookups.triangle.ravel()
+                    flags = np.zeros(R * R, bool)
+                    flags[on] = bake.hull[p][tri[on]]
+                    local[flags] = 0.0
+                incident = local[:, :3] + (1.0 - local[:, 3:]) * distant
+            out[on] += w * incident[on]
+    return out.reshape(R, R, 3), lookups.part >= 0
+
+
+def _relative_error(got, want, mask):
+    return np.abs(got[mask] - want[mask]).max() / np.abs(want[mask]).max()
+
+
+def test_playback_at_a_sampled_view_equals_the_rendering_matrix(gl_ctx, room):
+    scene, box, ellipsoids = room
+    bake = _fake_bake(scene, box, ellipsoids)
+    session, method, hdr = _play(gl_ctx, scene, bake, path=0.0, blend=False)
+    want, mask = _expected(gl_ctx, scene, bake, session.camera, [(0, 1.0)])
+    assert mask.sum() > 250  # the teapot and its lid in view
+    assert _relative_error(hdr, want, mask) < 1e-3
+    # the sphere-at-infinity model through its own matrix
+    method.values["em_model"] = "sphere"
+    session.render_offscreen(method, (R, R))
+    want, _ = _expected(gl_ctx, scene, bake, session.camera, [(0, 1.0)], model="sphere")
+    assert _relative_error(session.read_hdr().astype(np.float64), want, mask) < 1e-3
+    # the paper's per-vertex texgen, against lookups rendered the same way
+    method.values.update({"em_model": "layered", "texgen": "vertex"})
+    session.render_offscreen(method, (R, R))
+    vertex = session.read_hdr().astype(np.float64)
+    want, _ = _expected(gl_ctx, scene, bake, session.camera, [(0, 1.0)], texgen="vertex")
+    assert _relative_error(vertex, want, mask) < 1e-3
+    assert _relative_error(vertex, hdr, mask) > 0.01  # and it is not the per-fragment image
+    session.release()
+
+
+def test_blended_playback_between_views_and_the_hull_split(gl_ctx, room):
+    scene, box, ellipsoids = room
+    bake = _fake_bake(scene, box, ellipsoids, seed=1, hull_share=0.5)
+    session, method, hdr = _play(gl_ctx, scene, bake, path=0.25, blend=True, hull=True)
+    assert method.last_blend.views == (0, 1)
+    assert np.allclose(method.last_blend.weights, (0.75, 0.25))
+    want, mask = _expected(gl_ctx, scene, bake, session.camera, [(0, 0.75), (1, 0.25)], hull=True)
+    assert _relative_error(hdr, want, mask) < 1e-3
+    # without the split, hull pixels would show the local layer: the images differ there
+    unsplit, _ = _expected(gl_ctx, scene, bake, session.camera, [(0, 0.75), (1, 0.25)])
+    assert _relative_error(hdr, unsplit, mask) > 0.05
+    session.release()
+
+
+def test_texgen_matches_the_numpy_geometry(gl_ctx, programs):
+    rng = np.random.default_rng(5)
+    box = BoxGeometry(lo=np.array([-4.0, -0.5, -4.0]), hi=np.array([4.0, 7.5, 4.0]))
+    ellipsoid = EllipsoidGeometry(
+        centre=np.array([0.1, 0.3, -0.2]), radii=np.array([0.9, 0.5, 0.7])
+    )
+    k = 64 * 64
+    d = rng.normal(size=(k, 3))
+    rows = np.arange(k // 8)
+    d[rows, rng.integers(0, 3, k // 8)] = 0.0  # parallel to a pair of box faces
+    d[k // 8 : k // 4, :2] = 0.0  # along z only
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    inside = ellipsoid.centre + rng.uniform(-0.5, 0.5, (k, 3)) * ellipsoid.radii
+    outside = rng.uniform(-3.0, 3.0, (k, 3))
+    o = np.where((np.arange(k) % 2 == 0)[:, None], inside, outside)
+    program = programs.get("testing/pem_texgen_probe.glsl")
+    textures = []
+    for unit, (name, value) in enumerate((("u_origins", o), ("u_directions", d))):
+        rgba = np.concatenate([value, np.zeros((k, 1))], axis=1).astype(np.float32)
+        texture = gl_ctx.texture((64, 64), 4, rgba.tobytes(), dtype="f4")
+        texture.use(location=unit)
+        program[name].value = unit
+        textures.append(texture)
+    program["u_box_lo"].value = tuple(box.lo)
+    program["u_box_hi"].value = tuple(box.hi)
+    program["u_ellipsoid_centre"].value = tuple(ellipsoid.centre)
+    program["u_ellipsoid_radii"].value = tuple(ellipsoid.radii)
+    target = gl_ctx.texture((64, 64), 4, dtype="f4")
+    gl_ctx.framebuffer([target]).use()
+    gl_ctx.viewport = (0, 0, 64, 64)
+    FullscreenPass(gl_ctx).draw(program)
+    out = np.frombuffer(target.read(), np.float32).reshape(k, 4).astype(np.float64)
+    for got, geometry in ((out[:, 0], box), (out[:, 1], ellipsoid)):
+        want = geometry.exit_distance(o, d)
+        hit = np.isfinite(want)
+        assert np.array_equal(got >= 0, hit)
+        assert np.allclose(got[hit], want[hit], rtol=1e-4, atol=1e-4)
+    # every ray from inside the ellipsoid leaves it; some from outside miss it
+    assert (out[0::2, 1] >= 0).all() and (out[1::2, 1] < 0).any()
+
+
+def test_a_bake_of_another_scene_or_mesh_is_refused_and_the_previous_one_stays(gl_ctx, room):
+    scene, box, ellipsoids = room
+    bake = _fake_bake(scene, box, ellipsoids)
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.show(bake, session.gpu_scene, Path("good.pem"))
+    other = _fake_bake(scene, box, ellipsoids)
+    other.scene = "studio"
+    with pytest.raises(InputFileError, match="a bake of scene 'studio', expected one of 'room'"):
+        method.show(other, session.gpu_scene, Path("other.pem"))
+    other = _fake_bake(scene, box, ellipsoids)
+    other.hull[0] = other.hull[0][:-3]
+    with pytest.raises(InputFileError, match=r"baked with .* triangles.*re-bake"):
+        method.show(other, session.gpu_scene, Path("mesh.pem"))
+    assert method.bake is bake
+    session.release()
