@@ -6,7 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-DEBIAN_PACKAGES=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth)
+# binutils: objdump and objcopy, which PyInstaller needs for the bundle (tests/test_packaging_bundle.py)
+DEBIAN_PACKAGES=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth binutils)
 
 install_debian_packages() {
     command -v dpkg-query >/dev/null || return 0
