@@ -26,7 +26,10 @@ levels, smoothness λ, tie μ, seed, bounces, the models' geometries),
 ``mesh_checks`` (per part: name, vertices, triangles, sha256 of the node's
 world-space float32 vertices then int32 faces, :func:`~.hull.mesh_check`),
 ``arrays`` (per array: name, dtype, shape, offset and length of its frame in
-the payload, sha256 of its uncompressed bytes) and ``checksum``, the SHA-256 of
+the payload, sha256 of its uncompressed bytes, and ``filter``: ``"shuffle"``
+when the frame holds the bytes as byte planes, all first bytes of the items
+then all second bytes…, as Blosc does, which zstd packs about a quarter
+smaller for half floats; absent: the bytes as they are) and ``checksum``, the SHA-256 of
 the header's JSON without ``checksum`` (sorted keys, compact) followed by the
 whole payload.
 
@@ -228,6 +231,24 @@ def _digest(header: dict, payload: bytes) -> str:
     return digest.hexdigest()
 
 
+def _shuffle(raw: bytes, itemsize: int) -> bytes:
+    """Byte planes: all first bytes of the items, then all second bytes, ... (as Blosc).
+
+    The high bytes of neighbouring half floats are alike, so zstd packs the planes
+    about a quarter smaller than the interleaved bytes.
+    """
+    if itemsize == 1:
+        return raw
+    return np.frombuffer(raw, np.uint8).reshape(-1, itemsize).T.tobytes()
+
+
+def _unshuffle(raw: bytes, itemsize: int) -> bytes:
+    """The inverse of :func:`_shuffle`."""
+    if itemsize == 1:
+        return raw
+    return np.frombuffer(raw, np.uint8).reshape(itemsize, -1).T.tobytes()
+
+
 def save_pem(path: str | os.PathLike, bake: PemBake) -> Path:
     """Write ``bake`` to ``path`` atomically (module docstring for the format).
 
@@ -236,11 +257,11 @@ def save_pem(path: str | os.PathLike, bake: PemBake) -> Path:
     Path
         ``path``.
     """
-    compressor = zstandard.ZstdCompressor(level=10)
+    compressor = zstandard.ZstdCompressor(level=19)
     entries, frames, offset = [], [], 0
     for name, array in _arrays(bake).items():
         raw = array.astype(array.dtype.newbyteorder("<"), copy=False).tobytes()
-        frame = compressor.compress(raw)
+        frame = compressor.compress(_shuffle(raw, array.dtype.itemsize))
         entries.append(
             {
                 "name": name,
@@ -249,6 +270,7 @@ def save_pem(path: str | os.PathLike, bake: PemBake) -> Path:
                 "offset": offset,
                 "length": len(frame),
                 "sha256": hashlib.sha256(raw).hexdigest(),
+                "filter": "shuffle",
             }
         )
         frames.append(frame)
@@ -340,6 +362,8 @@ def load_pem(path: str | os.PathLike) -> PemBake:
     try:
         for e in entries:
             raw = decompressor.decompress(payload[e["offset"] : e["offset"] + e["length"]])
+            if e.get("filter") == "shuffle":
+                raw = _unshuffle(raw, np.dtype(e["dtype"]).itemsize)
             if hashlib.sha256(raw).hexdigest() != e["sha256"]:
                 raise ValueError(e["name"])
             arrays[e["name"]] = np.frombuffer(raw, dtype=np.dtype(e["dtype"])).reshape(e["shape"])
