@@ -21,6 +21,7 @@ from envstudio.bake.pem.trace import SceneTracer
 from envstudio.errors import InputFileError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.scene_file import load_scene
+from envstudio.methods.pem import shipped_bake
 from envstudio.methods.pem.atlas import flat_maps
 from envstudio.render.session import RenderSession
 
@@ -211,4 +212,23 @@ def test_a_bake_of_another_scene_or_mesh_is_refused_and_the_previous_one_stays(g
     with pytest.raises(InputFileError, match=r"baked with .* triangles.*re-bake"):
         method.show(other, session.gpu_scene, Path("mesh.pem"))
     assert method.bake is bake
+    session.release()
+
+
+def test_a_truncated_or_foreign_file_keeps_the_shipped_bake(gl_ctx, tmp_path):
+    scene = load_scene("room")
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.prepare(session.gpu_scene)  # the shipped assets/pem/room.pem
+    shipped = method.bake
+    assert shipped is not None and shipped.scene == "room"
+    data = shipped_bake("room").read_bytes()
+    (tmp_path / "cut.pem").write_bytes(data[: len(data) // 2])
+    (tmp_path / "v9.pem").write_bytes(data[:8] + (9).to_bytes(4, "little") + data[12:])
+    for name, message in (("cut.pem", "truncated"), ("v9.pem", "version 9")):
+        method.values["pem"] = str(tmp_path / name)
+        with pytest.raises(InputFileError, match=message) as caught:
+            method.prepare(session.gpu_scene)
+        assert len(str(caught.value).splitlines()) == 1
+        assert method.bake is shipped and method.values["pem"] == ""
     session.release()
