@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from envstudio.bake.pem.hull import mesh_check
 from envstudio.bake.pem.infer import BoxGeometry, EllipsoidGeometry, distant_box, local_ellipsoid
 from envstudio.bake.pem.lookups import CHANNELS, MODELS
 from envstudio.bake.pem.lookups_gl import GlLookups
@@ -66,6 +67,7 @@ def _fake_bake(scene, box, ellipsoids, views=2, seed=0, hull_share=0.0):
         },
         maps=maps,
         hull=[rng.random(n.mesh.triangle_count) < hull_share for n in scene.reflectors()],
+        mesh_checks=[mesh_check(n) for n in scene.reflectors()],
         box=np.array([box.lo, box.hi]),
         origins=np.array([o for _, o in ellipsoids]),
         ellipsoids=np.array([[e.centre, e.radii] for e, _ in ellipsoids]),
@@ -211,6 +213,10 @@ def test_a_bake_of_another_scene_or_mesh_is_refused_and_the_previous_one_stays(g
     other.hull[0] = other.hull[0][:-3]
     with pytest.raises(InputFileError, match=r"baked with .* triangles.*re-bake"):
         method.show(other, session.gpu_scene, Path("mesh.pem"))
+    other = _fake_bake(scene, box, ellipsoids)
+    other.mesh_checks[1] = {**other.mesh_checks[1], "sha256": "0" * 64}
+    with pytest.raises(InputFileError, match="'lid' was baked from another mesh"):
+        method.show(other, session.gpu_scene, Path("moved.pem"))
     assert method.bake is bake
     session.release()
 

@@ -42,14 +42,19 @@ def node_world_mesh(node: Node) -> tuple[npt.NDArray[np.float32], npt.NDArray[np
 
 
 def mesh_check(node: Node) -> dict:
-    """``{"name", "vertices", "triangles", "sha256"}`` of a node's world-space mesh.
+    """``{"name", "vertices", "triangles", "sha256"}`` of a node's mesh where it stands.
 
-    ``sha256`` is the SHA-256 of the float32 world-space vertex bytes (n, 3)
-    followed by the int32 face bytes (m, 3), C order, little-endian.
+    ``sha256`` is the SHA-256 of the mesh's float32 vertex bytes (n, 3) as loaded
+    (object space), its int32 face bytes (m, 3) (C order, little-endian), then
+    the node's model matrix printed to 6 decimals: the same on every machine,
+    where a world-space product's last bits may differ between BLAS builds.
     """
-    vertices, faces = node_world_mesh(node)
-    digest = hashlib.sha256(np.ascontiguousarray(vertices, dtype="<f4").tobytes())
-    digest.update(np.ascontiguousarray(faces, dtype="<i4").tobytes())
+    vertices = np.ascontiguousarray(node.mesh.positions, dtype="<f4")
+    faces = np.ascontiguousarray(node.mesh.indices, dtype="<i4")
+    digest = hashlib.sha256(vertices.tobytes())
+    digest.update(faces.tobytes())
+    model = np.asarray(node.transform.matrix(), dtype=np.float64) + 0.0  # no -0.0
+    digest.update(" ".join(f"{x:.6f}" for x in np.round(model, 6).ravel()).encode())
     return {
         "name": node.name,
         "vertices": len(vertices),

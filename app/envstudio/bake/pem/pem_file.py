@@ -23,8 +23,8 @@ target, fov_y), ``views`` V, ``parts`` (the P part names), ``em_size`` n,
 ``levels`` L (n >> (L − 1) ≥ 1), ``models`` (model → channels: ``distant`` 3,
 ``local`` 4, ``sphere`` 3), ``parameters`` (size R, samples, em_size,
 levels, smoothness λ, tie μ, seed, bounces, the models' geometries),
-``mesh_checks`` (per part: name, vertices, triangles, sha256 of the node's
-world-space float32 vertices then int32 faces, :func:`~.hull.mesh_check`),
+``mesh_checks`` (per part: name, vertices, triangles, sha256 of the mesh's
+float32 vertices, int32 faces and model matrix, :func:`~.hull.mesh_check`),
 ``arrays`` (per array: name, dtype, shape, offset and length of its frame in
 the payload, sha256 of its uncompressed bytes, and ``filter``: ``"shuffle"``
 when the frame holds the bytes as byte planes, all first bytes of the items

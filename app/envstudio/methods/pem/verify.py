@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from envstudio.bake.pem.hull import mesh_check
 from envstudio.bake.pem.pem_file import PemBake
 from envstudio.errors import InputFileError
 from envstudio.scene.graph import Scene
@@ -37,10 +38,24 @@ def check_bake_for_scene(bake: PemBake, scene: Scene, path: Path) -> None:
         raise InputFileError(
             f"{path}: reflector parts {', '.join(bake.parts)}, expected {', '.join(parts)}"
         )
-    for node, hull in zip(scene.reflectors(), bake.hull, strict=True):
-        triangles = len(node.mesh.indices)
-        if len(hull) != triangles:
+    checks = list(getattr(bake, "mesh_checks", [])) or [None] * len(parts)
+    for node, hull, baked in zip(scene.reflectors(), bake.hull, checks, strict=True):
+        here = mesh_check(node)
+        if len(hull) != here["triangles"]:
             raise InputFileError(
                 f"{path}: part {node.name!r} was baked with {len(hull)} triangles, "
-                f"the scene's mesh has {triangles}: re-bake"
+                f"the scene's mesh has {here['triangles']}: re-bake"
+            )
+        if baked is None:
+            continue
+        if (baked["vertices"], baked["triangles"]) != (here["vertices"], here["triangles"]):
+            raise InputFileError(
+                f"{path}: part {node.name!r} was baked with {baked['vertices']} vertices and "
+                f"{baked['triangles']} triangles, the scene's mesh has {here['vertices']} and "
+                f"{here['triangles']}: re-bake"
+            )
+        if baked["sha256"] != here["sha256"]:
+            raise InputFileError(
+                f"{path}: part {node.name!r} was baked from another mesh or placement "
+                "(mesh checksum differs): re-bake"
             )
