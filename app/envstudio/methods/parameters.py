@@ -101,9 +101,7 @@ class Parameter:
 
     def describe(self) -> dict:
         """JSON-ready description."""
-        return {
-            k: v for k, v in asdict(self).items() if k == "default" or v not in (None, (), "")
-        }
+        return {k: v for k, v in asdict(self).items() if k == "default" or v not in (None, (), "")}
 
 
 class ParameterValues:
