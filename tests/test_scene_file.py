@@ -1,6 +1,9 @@
 """Scene files: the Banks material keys (sharpness, tangent field, model) and the brushed scene."""
 
+import numpy as np
 import pytest
+import trimesh
+from scipy.spatial import cKDTree
 
 from envstudio.errors import InputFileError
 from envstudio.io.scene_file import MODELS, load_scene, shipped_scenes
@@ -86,3 +89,38 @@ def test_bad_material_values_name_file_and_key(tmp_path, text, fragments):
     assert "scene.toml" in message and "object[0]" in message
     for fragment in fragments:
         assert fragment in message, message
+
+
+MESH_SCENE = """[environment]
+file = "hdr/studio.exr"
+[[object]]
+mesh = "mesh/teapot.obj"
+components = [3]
+{subdivide}
+"""
+
+
+def test_subdivide_refines_a_mesh_towards_its_smooth_surface(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(MESH_SCENE.format(subdivide=""))
+    coarse = load_scene(path).reflectors()[0].mesh
+    path.write_text(MESH_SCENE.format(subdivide="subdivide = 2"))
+    fine = load_scene(path).reflectors()[0].mesh
+    assert fine.triangle_count == 16 * coarse.triangle_count
+    # the smooth surface stays close to the coarse one: within 3 % of the lid's size
+    size = float(np.ptp(coarse.positions, axis=0).max())
+    surface = trimesh.Trimesh(coarse.positions, coarse.indices, process=False)
+    samples, _ = trimesh.sample.sample_surface(surface, 200_000, seed=1)
+    distance, _ = cKDTree(samples).query(fine.positions)
+    assert distance.max() < 0.03 * size
+
+    # and smoother: neighbouring normals turn less across each edge than before
+    def turn(mesh):
+        n = mesh.normals[mesh.indices]
+        return np.degrees(np.arccos(np.clip((n[:, 0] * n[:, 1]).sum(-1), -1, 1))).mean()
+
+    assert turn(fine) < 0.5 * turn(coarse)
+    for bad in ("subdivide = 9", "subdivide = 1.5", "subdivide = true"):
+        path.write_text(MESH_SCENE.format(subdivide=bad))
+        with pytest.raises(InputFileError, match=r"object\[0\]\.subdivide = .*0\.\.4"):
+            load_scene(path)

@@ -19,6 +19,7 @@ Example::
     rotation = [0.0, 0.0, 0.0]       # XYZ Euler, degrees
     scale = 1.0
     components = [0, 1, 2]           # optional: keep these connected components
+    subdivide = 2                    # optional: Loop subdivision steps (4x triangles each)
     color = [0.8, 0.2, 0.2]          # albedo of a local object
     [object.material]
     kd = [0.0, 0.0, 0.0]
@@ -46,7 +47,7 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.material import Material
-from envstudio.scene.mesh import MeshData
+from envstudio.scene.mesh import MeshData, loop_subdivided
 from envstudio.scene.primitives import box, uv_sphere
 from envstudio.scene.tangents import AXES, FIELDS, TangentField
 
@@ -211,7 +212,13 @@ class _SceneReader:
 
     def mesh(self, spec: dict[str, Any], where: str) -> MeshData:
         if "mesh" in spec:
-            return load_mesh(self.find(spec["mesh"]), spec.get("components"))
+            steps = spec.get("subdivide", 0)
+            if not isinstance(steps, int) or isinstance(steps, bool) or not 0 <= steps <= 4:
+                raise InputFileError(
+                    f"{self.path}: {where}.subdivide = {steps!r}, expected a whole number in 0..4"
+                )
+            mesh = load_mesh(self.find(spec["mesh"]), spec.get("components"))
+            return loop_subdivided(mesh, steps) if steps else mesh
         primitive = spec.get("primitive")
         size = self.number(spec, "size", 1.0, where)
         makers = {

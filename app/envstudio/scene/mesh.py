@@ -74,3 +74,25 @@ class MeshData:
         return MeshData(
             (self.positions - centre) * scale, self.normals, self.indices, self.name, self.uvs
         )
+
+
+def loop_subdivided(mesh: MeshData, steps: int) -> MeshData:
+    """``mesh`` after ``steps`` Loop subdivisions (4× the triangles each; normals recomputed).
+
+    Loop's scheme smooths towards the limit surface (it moves the original
+    vertices), so a coarse mesh such as the teapot gets the smooth surface the
+    PEM bake's close views need (seed 003 §6: ~40k triangles).
+
+    Parameters
+    ----------
+    mesh
+        The mesh; its UVs are dropped (Loop's scheme does not carry them here).
+    steps
+        Subdivision steps, ≥ 1.
+    """
+    import trimesh
+
+    vertices, faces = trimesh.remesh.subdivide_loop(mesh.positions, mesh.indices, iterations=steps)
+    fine = trimesh.Trimesh(vertices, faces, process=True)
+    normals = np.asarray(fine.vertex_normals, dtype=np.float32)
+    return MeshData(fine.vertices, normals, fine.faces, mesh.name)

@@ -121,8 +121,7 @@ def _path_widget(param: Parameter, current: str) -> tuple[bool, str]:
     if imgui.button("Open..."):
         dialog.open()  # NoFileDialogError reaches parameter_widgets' status line
     imgui.same_line()
-    imgui.set_next_item_width(-1.0)
-    changed, value = imgui.input_text("##path", current, imgui.InputTextFlags_.enter_returns_true)
+    changed, value = imgui.input_text(param.name, current, imgui.InputTextFlags_.enter_returns_true)
     imgui.pop_id()
     chosen = dialog.poll()
     if chosen is not None:
