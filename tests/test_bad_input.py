@@ -11,6 +11,7 @@ import pytest
 
 from envstudio.cli import main
 from envstudio.io.images import write_image
+from envstudio.methods.pem import shipped_bake
 from envstudio.resources import asset_root
 
 BUNNY = str(asset_root() / "mesh" / "bunny.ply")
@@ -107,11 +108,19 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         (["bench", "--converge", "--time-limit", "-1"], ["--time-limit -1", "positive"]),
         (["bench", "--resume"], ["--resume", "only with --converge"]),
         (["render", "--bogus", "-o", "OUT"], ["unrecognized arguments: --bogus"]),
+        (["nowhere.exr"], ["nowhere.exr", "no such file"]),  # envstudio FILE = view FILE
+        (["render", "--method", "pem", "--param", "pem=nowhere.pem", "-o", "OUT"], ["nowhere"]),
+        (
+            ["render", "--method", "pem", "--scene", "studio", "--param", "pem=ROOM", "-o", "OUT"],
+            ["a bake of scene 'room', expected one of 'studio'"],
+        ),
+        (["bake", "pem", "--scene", "room", "--elevations", "0", "-o", "OUT"], ["--elevations 0"]),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):
     argv = [a.replace("OUT", str(tmp_path / "out.png")) if a == "OUT" else a for a in argv]
     argv = [str(tmp_path / a) if a.startswith(("MISSING", "OUT.")) else a for a in argv]
+    argv = [a.replace("ROOM", str(shipped_bake("room"))) for a in argv]
     status, err = run_cli(capsys, *argv)
     assert_one_line_error(status, err, *fragments)
 

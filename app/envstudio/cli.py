@@ -7,6 +7,7 @@ for bad input.
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from collections.abc import Sequence
@@ -454,11 +455,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     --converge --resume`` saves its reference accumulation before it exits.
     """
     signal.signal(signal.SIGTERM, signal.default_int_handler)
+    argv = _file_means_view(list(sys.argv[1:] if argv is None else argv))
     try:
         args = build_parser().parse_args(argv)
         command = args.command or "view"
         if args.command is None:
-            args = build_parser().parse_args(["view", *(argv or sys.argv[1:])])
+            args = build_parser().parse_args(["view", *argv])
         if command == "doctor":  # before the commands' imports, which may be what is missing
             from envstudio.doctor import run_doctor
 
@@ -477,6 +479,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("envstudio: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `envstudio methods | head`: the reader left; say nothing more
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+def _file_means_view(argv: list[str]) -> list[str]:
+    """``envstudio FILE.exr`` is ``envstudio view FILE.exr`` (what a file manager runs)."""
+    if not argv or argv[0].startswith("-"):
+        return argv
+    subcommands = next(
+        a.choices for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)
+    )
+    if argv[0] in subcommands:
+        return argv
+    from pathlib import Path
+
+    from envstudio.io.images import HDR_SUFFIXES
+    from envstudio.io.meshes import MESH_SUFFIXES
+
+    if Path(argv[0]).suffix.lower() in (*HDR_SUFFIXES, *MESH_SUFFIXES, ".toml"):
+        return ["view", *argv]
+    return argv
 
 
 if __name__ == "__main__":
