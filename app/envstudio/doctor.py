@@ -68,6 +68,8 @@ def _apt(packages: str) -> str:
 
 
 def _pip(spec: str) -> str:
+    if getattr(sys, "frozen", False):  # the PyInstaller bundle: no pip, its packages are inside
+        return "unpack the bundle again (or rebuild it: python packaging/build_bundle.py)"
     return f"{sys.executable} -m pip install '{spec}'"
 
 
@@ -200,7 +202,7 @@ def _check_window(report: Report) -> None:
         report.item("glfw", f"unusable ({_first_line(exc)})")
         report.missing(
             "the glfw package or its libglfw",
-            f"{sys.executable} -m pip install --force-reinstall 'glfw>=2.7'",
+            _pip("--force-reinstall glfw>=2.7"),
         )
     try:
         import moderngl_window.context.glfw  # noqa: F401
@@ -278,7 +280,7 @@ def _check_python(report: Report) -> None:
         report.item(
             "note",
             f"{len(differ)} differ from requirements.lock: "
-            f"{sys.executable} -m pip install -r requirements.lock",
+            + _pip("-r requirements.lock").replace("'", ""),
         )
 
 
