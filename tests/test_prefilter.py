@@ -117,6 +117,34 @@ def test_brute_force_matches_an_independent_float64_sum(exponent):
         assert np.allclose(got, truth, rtol=2e-4), (got, truth)
 
 
+@pytest.mark.parametrize(
+    "kernel",
+    [
+        kernels.phong(500.0),
+        kernels.phong(10.0),
+        kernels.phong(2.0),
+        kernels.phong(1.5),
+        kernels.phong(0.5),
+        kernels.diffuse(),
+    ],
+)
+def test_derivative_bounds_hold_on_every_interval(kernel):
+    """Kernel.derivative_bound bounds the first three derivatives of k̂ on every interval."""
+    rng = np.random.default_rng(4)
+    ends = np.sort(rng.uniform(-1, 1, size=(300, 2)), axis=1).astype(np.float32)
+    ends[:100] = np.sort(rng.uniform(0.9, 1, size=(100, 2)), axis=1)  # where the lobe is
+    n = kernel.exponent
+    inside = ends[:, :1] + (ends[:, 1:] - ends[:, :1]) * np.linspace(0, 1, 400)
+    c, lit = np.clip(inside, 1e-12, None), inside > 0
+    for order in (1, 2, 3):
+        bound = kernel.derivative_bound(ends[:, 0], ends[:, 1], order)
+        factor = abs(float(np.prod([n - k for k in range(order)])))
+        exact = np.where(lit, factor * c ** (n - order), 0.0).max(axis=1)
+        assert np.all(bound >= exact * (1 - 1e-4) - 1e-6), order
+    lobe = kernels.lobe([0, 1], [0, 1])
+    assert np.all(np.isinf(lobe.derivative_bound(ends[:, 0], ends[:, 1], 2)))
+
+
 # --- hierarchical ----------------------------------------------------------------------------
 
 
@@ -144,6 +172,20 @@ def test_hierarchical_matches_brute_force_on_sunrise(sunrise_32, kernel):
     assert relative_max_difference(hier, brute) < 0.01
 
 
+@pytest.mark.parametrize(
+    "kernel",
+    [kernels.phong(0.5), kernels.phong(1.5), kernels.phong(2.5), kernels.diffuse(), lobe_kernel()],
+)
+def test_hierarchical_on_a_constant_map_without_warnings(kernel):
+    """Exponents where k̂'s derivatives are unbounded at c = 0 take no Taylor step there."""
+    image = np.full((32, 64, 3), 2.0, np.float32)
+    directions = target_directions("cube", 8)
+    brute = brute_force.prefilter(image, directions, kernel)
+    with np.errstate(all="raise"):
+        hier = hierarchical.prefilter(image, directions, kernel, 1e-3, threads=1)
+    assert relative_max_difference(hier, brute) < 1e-3
+
+
 def test_hierarchical_threshold_trades_accuracy():
     image = smooth_map(64, seed=11)
     directions = target_directions("cube", 8)
@@ -166,6 +208,44 @@ def test_pyramid_radii_bound_every_texel():
         cos = np.clip(np.sum(texels * d, axis=0), -1, 1)
         angle = np.arccos(cos).max(axis=(1, 3)).reshape(-1)
         assert np.all(angle <= np.arccos(pyramid.radii[level][0]) + 1e-4)
+
+
+def test_pyramid_moments_match_their_texels():
+    """Each node's centroid, second moment and residual, summed directly over its texels."""
+    image = smooth_map(16, 2) * np.array([1.0, 0.5, 2.0], np.float32)  # coloured: a_n > 0
+    image[3, 5] = 400.0  # a bright texel
+    pyramid = hierarchical.source_pyramid(image)
+    dirs = latlong.texel_directions(16).reshape(-1, 3)
+    weights = image.reshape(-1, 3) * latlong.texel_solid_angles(16).reshape(-1, 1)
+    for level in range(1, pyramid.top + 1):
+        h, w = pyramid.shapes[level]
+        f = 2**level
+        rows, cols = np.divmod(np.arange(16 * 32), 32)
+        node = (rows // f) * w + cols // f
+        for n in (0, h * w // 2, h * w - 1, (3 // f) * w + 5 // f):
+            mine = node == n
+            d, ws = dirs[mine], weights[mine]
+            total = ws.sum(axis=1)
+            centroid = (d * total[:, None]).sum(axis=0) / total.sum()
+            assert np.allclose(pyramid.samples[level][:, n], centroid, atol=1e-6)
+            r = unit_vectors(5, n)
+            quad = ((((d - centroid) @ r.T) ** 2) * total[:, None]).sum(axis=0) / total.sum()
+            pairs = np.stack([r[:, a] * r[:, b] for a, b in hierarchical._PAIRS], axis=1)
+            assert np.allclose(pairs @ pyramid.spreads[level][:, n], quad, rtol=1e-4, atol=1e-9)
+            dipole = (d - centroid).T @ ws
+            assert np.allclose(pyramid.dipoles[level][n], dipole.reshape(-1), rtol=1e-3, atol=1e-9)
+            size = np.linalg.norm(dipole, axis=0) / ws.sum(axis=0)
+            assert pyramid.residuals[level][n] == pytest.approx(size.max(), rel=1e-4, abs=1e-9)
+
+
+def test_hierarchical_taylor_bound_on_a_wide_lobe():
+    """N = 10, where the spread test alone sends the whole lobe to texels: still within T."""
+    image = brute_force.downsample_latlong(read_environment(SUNRISE), 64)
+    directions = target_directions("cube", 16)
+    kernel = kernels.phong(10.0)
+    brute = brute_force.prefilter(image, directions, kernel)
+    hier = hierarchical.prefilter(image, directions, kernel, 1e-3)
+    assert relative_max_difference(hier, brute) < 0.002
 
 
 # --- the command -----------------------------------------------------------------------------
@@ -348,6 +428,64 @@ def test_dds_round_trip(tmp_path):
     for wrote, read in zip(levels, back, strict=True):
         assert np.allclose(read[..., :3], wrote, rtol=1e-3)
         assert np.all(read[..., 3] == 1.0)
+
+
+def test_dds_rgba8_cube_read_back_by_openimageio(tmp_path):
+    """The DDS container (header, DX10 block, cube flags, face order, mip chain) through an
+    independent reader: OpenImageIO reads the RGBA8 file the writer makes with the layout of
+    the RGBA16F one, texel by texel, every face and level.
+
+    OpenImageIO 3.2's DDS reader gives cube mip level m the size of level m - 1 (its size
+    loop starts at 1), so a face's tile holds level m's texels first, then runs on into the
+    following data; the comparison takes the first n_m² texels of each face, and the copy
+    OpenImageIO reads is padded so that the last face's longer read does not hit the end.
+    """
+    rng = np.random.default_rng(5)
+    levels = [rng.uniform(-0.1, 1.1, size=(6, 8 >> k, 8 >> k, 3)) for k in range(4)]
+    path = write_dds_cube(tmp_path / "cube.dds", levels, pixel_format="rgba8")
+    padded = tmp_path / "padded.dds"
+    padded.write_bytes(path.read_bytes() + bytes(4 * 8 * 8))
+    inp = oiio.ImageInput.open(str(padded))
+    assert inp is not None, oiio.geterror()
+    try:
+        assert inp.spec().get_string_attribute("textureformat") == "CubeFace Environment"
+        assert inp.spec().get_string_attribute("dds:CubeMapSides") == "+x -x +y -y +z -z"
+        assert not inp.seek_subimage(0, len(levels))
+        for m, level in enumerate(levels):
+            assert inp.seek_subimage(0, m)
+            spec = inp.spec()
+            assert spec.nchannels == 4 and spec.format == "uint8"
+            want = np.rint(np.clip(level, 0, 1) * 255)
+            for face in range(6):
+                tile = inp.read_tile(0, face * spec.tile_height, 0, "uint8")
+                assert tile is not None, inp.geterror()
+                texels = np.asarray(tile).reshape(-1, 4)[: want[face].size // 3]
+                assert np.array_equal(texels[:, :3], want[face].reshape(-1, 3)), (m, face)
+                assert np.all(texels[:, 3] == 255)
+    finally:
+        inp.close()
+    # The RGBA16F file: the same bytes but for the DXGI format, the pitch and the texels.
+    half = write_dds_cube(tmp_path / "half.dds", levels).read_bytes()
+    byte = path.read_bytes()
+    assert (
+        half[:20] == byte[:20] and half[24:128] == byte[24:128] and half[132:148] == byte[132:148]
+    )
+    assert (
+        struct.unpack_from("<I", half, 128)[0] == 10
+        and struct.unpack_from("<I", byte, 128)[0] == 28
+    )
+
+
+def test_openimageio_reads_no_float_dds(tmp_path):
+    """Why the RGBA16F round trip uses the test's own reader (io/dds.py's docstring)."""
+    path = write_dds_cube(tmp_path / "cube.dds", [np.ones((6, 4, 4, 3)), np.ones((6, 2, 2, 3))])
+    assert oiio.ImageInput.open(str(path)) is None
+    assert "Unsupported DXGI format: 10" in oiio.geterror()
+    legacy = bytearray(path.read_bytes())
+    legacy[84:88] = struct.pack("<I", 113)  # D3DFMT_A16B16G16R16F as the FourCC, no DX10 block
+    (tmp_path / "legacy.dds").write_bytes(bytes(legacy[:128] + legacy[148:]))
+    assert oiio.ImageInput.open(str(tmp_path / "legacy.dds")) is None
+    assert "Unsupported compression type: 113" in oiio.geterror()
 
 
 def test_chain_command_writes_dds_exr_and_sh(tmp_path, capsys):

@@ -104,3 +104,17 @@ def test_chain_command_rejects_a_bad_sample_count(tmp_path, capsys):
     assert "--samples 0" in err and "1..16384" in err and len(err.splitlines()) == 1
     assert not list(tmp_path.iterdir())
     assert DEFAULT_SAMPLES == 256
+
+
+def test_split_levels_give_the_unsplit_result(gl_ctx, programs, monkeypatch):
+    """Sharing a texel's samples among f × f fragments changes only the order of the sum."""
+    from envstudio.prefilter import chain_gpu
+
+    assert chain_gpu.split_factor(512, 256) == 1 and chain_gpu.split_factor(1, 4096) == 64
+    assert all(chain_gpu.split_factor(m, 256) ** 2 <= 256 for m in (1, 2, 8, 64))
+    image = smooth_map(64, seed=6)
+    split = gpu_prefiltered_chain(gl_ctx, programs, image, 16, 5, 6.0, 1.0, samples=64)
+    monkeypatch.setattr(chain_gpu, "SPLIT_EDGE", 1)
+    whole = gpu_prefiltered_chain(gl_ctx, programs, image, 16, 5, 6.0, 1.0, samples=64)
+    for a, b in zip(split, whole, strict=True):
+        assert np.allclose(a.faces, b.faces, rtol=1e-5), a.exponent

@@ -376,8 +376,8 @@ def _add_prefilter_parser(sub) -> None:
         "--threshold",
         type=float,
         default=0.001,
-        help="hierarchical: largest filter spread accepted over a node, in (0, 1) "
-        "(seed 004: 0.001)",
+        help="hierarchical: the largest error accepted per unit of a node's radiance when "
+        "its filter is evaluated once for the node, in (0, 1) (seed 004: 0.001)",
     )
     prefilter.add_argument(
         "--source-height", type=int, help="box-filter the source to this many rows first"

@@ -29,6 +29,10 @@
 //   u_count       number of samples
 //   u_face        target face 0..5 (OpenGL order, shaders/common/cubemap.glsl)
 //   u_size        target face edge in texels
+//   u_split       f: the target is drawn f x f times larger, each fragment of a texel's
+//                 f x f block summing every (f^2)-th sample from its index in the block, so
+//                 small levels spread over the rasteriser's threads; the caller adds the
+//                 blocks (every fragment writes its share of the texel's mean)
 
 #if defined VERTEX_SHADER
 
@@ -50,11 +54,15 @@ uniform sampler2D u_table;
 uniform int u_count;
 uniform int u_face;
 uniform float u_size;
+uniform int u_split;
 
 out vec4 frag_color;
 
 void main() {
-    vec3 r = cube_face_direction(u_face, (floor(gl_FragCoord.xy) + 0.5) / u_size);
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 texel = pixel / u_split;
+    ivec2 part = pixel - texel * u_split;
+    vec3 r = cube_face_direction(u_face, (vec2(texel) + 0.5) / u_size);
     // Duff et al. 2017's branchless orthonormal basis about r.
     float sign_z = r.z >= 0.0 ? 1.0 : -1.0;
     float a = -1.0 / (sign_z + r.z);
@@ -62,7 +70,7 @@ void main() {
     vec3 t = vec3(1.0 + sign_z * r.x * r.x * a, sign_z * b, -sign_z * r.x);
     vec3 s = vec3(b, sign_z + r.y * r.y * a, -r.y);
     vec3 sum = vec3(0.0);
-    for (int i = 0; i < u_count; ++i) {
+    for (int i = part.y * u_split + part.x; i < u_count; i += u_split * u_split) {
         vec4 q = texelFetch(u_table, ivec2(i, 0), 0);
         vec3 l = q.x * t + q.y * s + q.z * r;
 #if SOURCE == 0

@@ -25,7 +25,9 @@ The samples are one Fibonacci lattice in the lobe's frame, shared by every
 texel (no noise; what remains is a smooth bias, measured against
 prefilter.brute_force in docs/prefilter/README.md). On studio.exr it was a
 third to a half more accurate than a Hammersley set of the same size. Level k
-takes S · 2^k samples (:func:`level_samples`).
+takes S · 2^k samples (:func:`level_samples`). Faces under :data:`SPLIT_EDGE` texels are
+drawn f × f times larger with the samples shared out among each texel's f × f fragments
+(:func:`split_factor`), which the read-back adds up.
 """
 
 from __future__ import annotations
@@ -45,10 +47,12 @@ __all__ = [
     "DEFAULT_SAMPLES",
     "FIS_BIAS",
     "MAX_SAMPLES",
+    "SPLIT_EDGE",
     "gpu_prefiltered_chain",
     "level_samples",
     "lobe_samples",
     "source_face",
+    "split_factor",
 ]
 
 #: Importance samples per texel of level 0 (docs/prefilter/README.md: the error against the
@@ -61,6 +65,12 @@ MAX_SAMPLES = 16384
 #: +1 at 256 samples, while −1 was worse again (docs/prefilter/README.md).
 FIS_BIAS = 0.0
 _SHADER = "prefilter/phong_chain.glsl"
+#: A level whose face is smaller is drawn split (:func:`split_factor`), so that the rasteriser
+#: (llvmpipe: 64 × 64-pixel tiles, one thread each) has several tiles to share out and each
+#: fragment a shorter loop. Measured on llvmpipe, 8 levels from 128²: levels 1–7 drew in
+#: 0.4 s instead of 0.8 s; larger edges drew faster still but read back and summed (m f)²
+#: texels a face, and the chain came out slower (docs/prefilter/README.md).
+SPLIT_EDGE = 128
 
 
 def lobe_samples(exponent: float, count: int, bias: float = FIS_BIAS) -> npt.NDArray[np.float32]:
@@ -105,6 +115,20 @@ def level_samples(samples: int, level: int) -> int:
     the cost per level: the whole chain costs about twice its level 0.
     """
     return int(min(MAX_SAMPLES, samples << level))
+
+
+def split_factor(face: int, count: int) -> int:
+    """f: a face of ``face`` texels is drawn f × f times larger, f² ≤ ``count`` samples.
+
+    Every fragment of a texel's f × f block sums every f²-th of its samples (the same
+    samples, summed in another order: the result is the unsplit one to float rounding), so
+    a small level is as many fragments as a large one: unsplit, a 1² face is one fragment on
+    one llvmpipe thread, 20 times slower a sample than level 0 (docs/prefilter/README.md).
+    """
+    f = max(1, SPLIT_EDGE // max(1, face))
+    while f > 1 and f * f > count:
+        f //= 2
+    return f
 
 
 def source_face(rows: int, size: int) -> int:
@@ -186,20 +210,23 @@ def gpu_prefiltered_chain(
             table = lobe_samples(exponent, count, fis_bias)
             table_tex = ctx.texture((count, 1), 4, table.tobytes(), dtype="f4")
             table_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            target = ctx.texture((m, m), 4, dtype="f4")
+            split = split_factor(m, count)
+            target = ctx.texture((m * split, m * split), 4, dtype="f4")
             fbo = ctx.framebuffer([target])
             scope = ctx.scope(fbo, enable_only=moderngl.NOTHING)
             try:
                 table_tex.use(1)
                 program["u_count"].value = count
                 program["u_size"].value = float(m)
+                program["u_split"].value = split
                 faces = []
                 with scope:
                     for face in range(6):
                         program["u_face"].value = face
                         quad.draw(program)
-                        data = fbo.read(components=4, dtype="f4")
-                        faces.append(np.frombuffer(data, np.float32).reshape(m, m, 4)[..., :3])
+                        data = fbo.read(components=3, dtype="f4")
+                        shares = np.frombuffer(data, np.float32).reshape(m, split, m, split, 3)
+                        faces.append(shares.sum(axis=(1, 3), dtype=np.float64).astype(np.float32))
             finally:
                 for obj in (scope, fbo, target, table_tex):
                     obj.release()

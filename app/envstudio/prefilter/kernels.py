@@ -37,6 +37,8 @@ KERNELS = ("diffuse", "phong", "lobe")
 
 # ln of the smallest Phong shape value computed, e^-80: normal in float32 (whose least is e^-87.3).
 _LOG_FLOOR = -80.0
+# The least normal float32: the cosine floor for exponents below 1, where e^(-80/N) underflows.
+_SMALLEST_NORMAL = float(np.finfo(np.float32).tiny)
 # Entries of the uniform look-up table a lobe is resampled to, over c ∈ [−1, 1].
 _LUT_SIZE = 8192
 
@@ -81,11 +83,16 @@ class Kernel:
             # max(c, 0)^N as exp(N log c): NumPy's float32 exp and log are SIMD, pow is not.
             # c is floored where c^N = e^-80 (2e-35): below it float32 turns subnormal, and
             # arithmetic on subnormals is about a hundred times slower.
-            np.maximum(cos, np.float32(math.exp(_LOG_FLOOR / self.exponent)), out=cos)
+            np.maximum(cos, self.cosine_floor, out=cos)
             np.log(cos, out=cos)
             np.multiply(cos, np.float32(self.exponent), out=cos)
             return np.exp(cos, out=cos)
         return _lookup(self.lut, cos)
+
+    @property
+    def cosine_floor(self) -> np.float32:
+        """The least cosine the Phong shape is computed at: c^N = e^−80, a normal float32."""
+        return np.float32(max(math.exp(_LOG_FLOOR / self.exponent), _SMALLEST_NORMAL))
 
     def spread(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """max k̂ − min k̂ over each cosine interval [lo, hi] (the hierarchical test).
@@ -104,6 +111,41 @@ class Kernel:
         if self.lut is None:
             return np.subtract(self.shape_inplace(hi), self.shape_inplace(lo), out=hi)
         return _table_spread(self.lut, lo, hi)
+
+    def derivative_bound(self, lo: np.ndarray, hi: np.ndarray, order: int) -> np.ndarray:
+        """An upper bound of |k̂⁽ᵐ⁾(c)|, m = ``order`` ≥ 1, over each interval [lo, hi].
+
+        For max(c, 0)^N, k̂⁽ᵐ⁾ = N (N − 1) … (N − m + 1) c^(N−m) where c > 0 and 0 where
+        c < 0: with N ≥ m its magnitude grows with c, so the bound is its value at
+        max(hi, 0); with N < m it is unbounded at c = 0 (or jumps there): its value at
+        lo if lo > 0, 0 if hi ≤ 0, inf otherwise. A tabulated lobe is piecewise
+        linear with kinks: inf (the hierarchical method then uses only the spread).
+
+        Parameters
+        ----------
+        lo, hi
+            (...) float32 interval ends, lo ≤ hi (not overwritten).
+        order
+            m.
+
+        Returns
+        -------
+        (...) float32 or float64
+        """
+        return self._power_bound(lo, hi, order)
+
+    def _power_bound(self, lo: np.ndarray, hi: np.ndarray, order: int) -> np.ndarray:
+        """max |d^order/dc^order max(c, 0)^N| over [lo, hi] (:meth:`derivative_bound`)."""
+        if self.lut is not None:
+            return np.full(np.shape(hi), np.inf, np.float32)
+        n = self.exponent
+        factor = math.prod(n - k for k in range(order))
+        power = np.float32(n - order)
+        if n >= order:
+            return np.float32(factor) * np.maximum(hi, 0.0) ** power
+        inside = abs(factor) * np.maximum(lo, 1e-30).astype(np.float64) ** power
+        bound = np.where(lo > 0.0, inside, np.inf)
+        return np.where(hi <= 0.0, np.float32(0.0), bound).astype(np.float32)
 
     def shape(self, cos: npt.ArrayLike) -> np.ndarray:
         """k̂(c) of a copy of ``cos``: (...) float → (...) float32."""
