@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from envstudio.io.images import read_image
+from test_packaging import _checked
 from test_window_smoke import xvfb  # noqa: F401 (the fixture: a private Xvfb server)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,12 +60,6 @@ def _run(argv: list[str], cwd: Path, **env: str) -> subprocess.CompletedProcess:
         timeout=TIMEOUT_S,
         check=False,
     )
-
-
-def _checked(result: subprocess.CompletedProcess) -> str:
-    assert result.returncode == 0, f"{result.args}:\n{result.stdout}\n{result.stderr}"
-    assert "Traceback" not in result.stderr, result.stderr
-    return result.stdout
 
 
 @pytest.fixture(scope="module")

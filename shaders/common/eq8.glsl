@@ -14,17 +14,7 @@ uniform float u_diffuse_level;
 in vec3 v_world_position;
 in vec3 v_world_normal;
 
-// Unit normal n (turned towards the viewer: back faces of open meshes reflect too)
-// and mirror reflection r of the view direction, both in world space.
-void reflection_frame(vec3 world_normal, vec3 world_position, vec3 camera_position,
-                      out vec3 n, out vec3 r) {
-    n = normalize(world_normal);
-    vec3 v = normalize(camera_position - world_position);
-    if (dot(n, v) < 0.0) {
-        n = -n;
-    }
-    r = reflect(-v, n);
-}
+#include "common/reflection.glsl"
 
 // Eq. 8 with the glossy radiance looked up along r by the caller.
 vec3 eq8_shade(samplerCube environment, vec3 n, vec3 r, vec3 glossy, float kd,

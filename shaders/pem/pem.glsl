@@ -26,6 +26,7 @@ uniform vec3 u_box_hi;
 uniform vec3 u_em_origin;
 uniform vec3 u_ellipsoid_centre;
 uniform vec3 u_ellipsoid_radii;
+#include "common/reflection.glsl"
 #include "pem/texgen.glsl"
 
 #if defined VERTEX_SHADER
@@ -40,12 +41,8 @@ void main() {
     vec4 world = mesh_world();
     gl_Position = u_projection * u_view * world;
 #if defined PEM_TEXGEN_VERTEX
-    vec3 n = normalize(v_world_normal);
-    vec3 v = normalize(u_camera_position - world.xyz);
-    if (dot(n, v) < 0.0) {
-        n = -n;
-    }
-    vec3 r = reflect(-v, n);
+    vec3 n, r;
+    reflection_frame(v_world_normal, world.xyz, u_camera_position, n, r);
     vec3 p = world.xyz;
     v_q_distant = pem_lookup(p, r, pem_box_exit(p, r, u_box_lo, u_box_hi), u_em_origin);
     v_q_local = pem_lookup(
@@ -106,12 +103,8 @@ bool pem_on_hull() {
 }
 
 void main() {
-    vec3 n = normalize(v_world_normal);
-    vec3 v = normalize(u_camera_position - v_world_position);
-    if (dot(n, v) < 0.0) {
-        n = -n;
-    }
-    vec3 r = reflect(-v, n);
+    vec3 n, r;
+    reflection_frame(v_world_normal, v_world_position, u_camera_position, n, r);
 #if defined PEM_TEXGEN_VERTEX
     vec3 q_distant = v_q_distant;
     vec3 q_local = v_q_local;
