@@ -237,4 +237,12 @@ def test_a_truncated_or_foreign_file_keeps_the_shipped_bake(gl_ctx, tmp_path):
             method.prepare(session.gpu_scene)
         assert len(str(caught.value).splitlines()) == 1
         assert method.bake is shipped and method.values["pem"] == ""
+    # turned after the bake (the viewer's rotation or turntable): the status says so
+    session.render_offscreen(method, (32, 32))
+    assert "views x 2 parts resident" in method.status_line()
+    for node in scene.reflectors():
+        node.transform.rotation = (0.0, 30.0, 0.0)
+    session.gpu_scene.refresh_transforms()
+    session.render_offscreen(method, (32, 32))
+    assert "moved or turned since its bake" in method.status_line()
     session.release()

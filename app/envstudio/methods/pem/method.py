@@ -14,7 +14,7 @@ and says how to bake one.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import moderngl
@@ -50,6 +50,7 @@ class _Loaded:
     path: Path
     bake: PemBake
     textures: PemTextures
+    models: list = field(default_factory=list)  # the reflectors' model matrices it was baked for
 
 
 @register
@@ -110,6 +111,7 @@ class PemMethod(Method):
         self._dummy: dict[str, moderngl.Texture] = {}
         self._thumbnails: list[moderngl.Texture] = []
         self._last_play: float | None = None
+        self._moved = False
         self.last_blend: ViewBlend | None = None
 
     # -- loading ---------------------------------------------------------------------
@@ -182,7 +184,9 @@ class PemMethod(Method):
         textures = PemTextures(self.ctx, bake)
         self._release_loaded()
         self._missing = ""
-        self._loaded = _Loaded(self._key(scene) if key is None else key, Path(path), bake, textures)
+        models = [np.array(n.model, dtype=np.float64) for n in scene.reflectors()]
+        key = self._key(scene) if key is None else key
+        self._loaded = _Loaded(key, Path(path), bake, textures, models)
 
     @property
     def bake(self) -> PemBake | None:
@@ -296,6 +300,11 @@ class PemMethod(Method):
 
     def render(self, frame: FrameInputs) -> None:
         self.prepare(frame.scene)
+        if self._loaded is not None:
+            now = [n.model for n in frame.scene.reflectors()]
+            self._moved = not all(
+                np.allclose(a, b, atol=1e-9) for a, b in zip(now, self._loaded.models, strict=True)
+            )
         program = self.programs.get("pem/pem.glsl", texgen_defines(str(self.values["texgen"])))
         self._bind(program, frame)
         frame.target.use()  # the static EM's capture may have bound its own framebuffer
@@ -313,6 +322,11 @@ class PemMethod(Method):
             return self._missing
         if self._loaded is None or self.last_blend is None:
             return ""
+        if self._moved:
+            return (
+                "the reflector was moved or turned since its bake (rotation, turntable): its "
+                "reflections are those of the baked placement; reset the rotation"
+            )
         bake, blend = self._loaded.bake, self.last_blend
         pairs = zip(blend.views, blend.weights, strict=True)
         views = " + ".join(f"{v} ({w:.2f})" for v, w in pairs)
