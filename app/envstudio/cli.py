@@ -269,6 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
             "banks-slices",
             "rsibr-warp",
             "pem-offmanifold",
+            "pem-maps",
         ),
         help="kautz-grid: seed 000 Figure 6 (b x f_lambda); kautz-seams: Figure 4, "
         "box vs cross-face mip chain at b = 9.4, with the seam measurement; "
@@ -276,7 +277,8 @@ def build_parser() -> argparse.ArgumentParser:
         "sphere (no GL; the scene options are ignored); rsibr-warp: seed 002 Figure 4, "
         "the three source maps, their warps into the camera's frame and the generated map; "
         "pem-offmanifold: seed 003 Figures 6-7, layered PEM, sphere at infinity and static EM "
-        "against a ray trace midway between baked views and 10 and 20 degrees above the arc",
+        "against a ray trace midway between baked views and 10 and 20 degrees above the arc; "
+        "pem-maps: seed 003 Figure 5, the nearest view's inferred maps per model and level",
     )
     _add_scene_options(figure)
     _add_param_option(figure)

@@ -599,6 +599,31 @@ def run_figure(args: argparse.Namespace) -> int:
                 f"camera's frame (times its singularity fade), then the generated map ({n}²)"
             )
             return 0
+        if args.name == "pem-maps":
+            from envstudio.methods.pem import offmanifold
+            from envstudio.methods.pem.blending import view_blend
+
+            method = session.method("pem")
+            apply_params(session, method, args.param)
+            method.prepare(session.gpu_scene)
+            if method.bake is None:
+                raise ParameterError(f"pem: {method.status_line()}")
+            blend = view_blend(method.bake.view_space, session.camera.position, blend=False)
+            display = session.renderer.display
+            offmanifold.maps_figure(
+                method.bake,
+                blend.views[0],
+                0,
+                output,
+                float(display["exposure"]),
+                str(display["tonemap"]),
+            )
+            print(
+                f"{output}: view {blend.views[0]} (nearest the camera), part "
+                f"{method.bake.parts[0]!r}: rows distant, local α·L, local α, sphere; "
+                "columns MIP levels"
+            )
+            return 0
         if args.name == "pem-offmanifold":
             from envstudio.methods.pem import offmanifold
 

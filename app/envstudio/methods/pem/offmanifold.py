@@ -286,3 +286,61 @@ def figure_image(results: list[ViewResult], path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
+
+
+def maps_figure(bake, view: int, part: int, path, exposure: float = 0.0, tonemap: str = "aces"):
+    """Seed 003 Figure 5 as one PNG: a view's inferred maps of one part, per model and level.
+
+    Parameters
+    ----------
+    bake
+        A loaded bake.
+    view, part
+        Which maps.
+    path
+        The PNG written (atomically).
+    exposure, tonemap
+        The display's settings for the radiance maps (α is shown linearly).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    from envstudio.core.cubemap import faces_to_cross
+    from envstudio.io.atomic import atomic_path
+
+    levels = min(5, len(bake.maps["distant"]))
+    rows = [
+        ("distant (box)", "distant", slice(0, 3)),
+        ("local α·L (ellipsoid)", "local", slice(0, 3)),
+        ("local α", "local", 3),
+        ("sphere at infinity", "sphere", slice(0, 3)),
+    ]
+    fig, axes = plt.subplots(len(rows), levels, figsize=(2.6 * levels, 2.2 * len(rows)), dpi=100)
+    for r, (label, model, channels) in enumerate(rows):
+        for k in range(levels):
+            faces = bake.maps[model][k][view, part][..., channels]
+            cross = faces_to_cross(faces if faces.ndim == 4 else faces[..., None])
+            if faces.ndim == 4:
+                image = to_ldr(cross, exposure, tonemap)
+            else:
+                image = np.clip(cross[..., 0], 0.0, 1.0)
+            ax = axes[r, k]
+            ax.imshow(image, cmap="gray", vmin=0.0, vmax=1.0, interpolation="nearest")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if r == 0:
+                n = bake.em_size >> k
+                ax.set_title(f"level {k} ({n}²)", fontsize=9)
+            if k == 0:
+                ax.set_ylabel(label, fontsize=9)
+    fig.suptitle(
+        f"{bake.scene}: view {view} (azimuth {bake.cameras[view, 0]:.1f}°), part "
+        f"{bake.parts[part]!r}",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
