@@ -92,7 +92,7 @@ uniform bool u_use_fresnel;
 uniform bool u_use_diffuse;
 uniform float u_fresnel;
 uniform float u_kd;
-uniform float u_lod_bias;      // the bake's parameters["lod_bias"], added before the clamp
+uniform float u_lod_bias;      // the bake's parameters["lod_bias"] (+ the lod_scale offset)
 uniform vec3 u_sh9[9];
 out vec4 f_color;
 #endif

@@ -87,6 +87,14 @@ class PemMethod(Method):
             choices=TEXGENS,
             rebuild=True,
         ),
+        Parameter(
+            "lod_scale",
+            "choice",
+            "screen",
+            help="MIP level from this image's pixel footprint (screen, as the hardware), or as "
+            "the bake's resolution saw it (bake: the levels the solve fitted, at any size).",
+            choices=("screen", "bake"),
+        ),
         Parameter("blend", "bool", True, help="Blend the nearest 2 (arc) or 4 (grid) views."),
         Parameter("snap", "bool", False, help="Put the camera on the baked path at `path`."),
         Parameter("play", "bool", False, help="Move the camera along the path (snaps it)."),
@@ -280,7 +288,12 @@ class PemMethod(Method):
         set_uniform(program, "u_hull_width", loaded.textures.width)
         set_uniform(program, "u_em_size", bake.em_size)
         set_uniform(program, "u_em_levels", len(bake.maps["distant"]))
-        set_uniform(program, "u_lod_bias", float(bake.parameters.get("lod_bias", 0.0)))
+        bias = float(bake.parameters.get("lod_bias", 0.0))
+        if self.values["lod_scale"] == "bake":  # the footprint the bake's R x R image had
+            bias += float(
+                np.log2(frame.size[1] / float(bake.parameters.get("size", frame.size[1])))
+            )
+        set_uniform(program, "u_lod_bias", bias)
         set_uniform(program, "u_box_lo", bake.box[0])
         set_uniform(program, "u_box_hi", bake.box[1])
         model = MODELS.index(str(self.values["em_model"]))
