@@ -237,6 +237,17 @@ def test_a_truncated_or_foreign_file_keeps_the_shipped_bake(gl_ctx, tmp_path):
             method.prepare(session.gpu_scene)
         assert len(str(caught.value).splitlines()) == 1
         assert method.bake is shipped and method.values["pem"] == ""
+    # a scene without a bake shows the static EM; a bad name there goes back to that too
+    studio = RenderSession(load_scene("studio"), ctx=gl_ctx, cube_size=32)
+    other = studio.method("pem")
+    studio.render_offscreen(other, (32, 32))
+    assert other.bake is None and "showing the static EM" in other.status_line()
+    other.values["pem"] = str(tmp_path / "cut.pem")
+    with pytest.raises(InputFileError, match="truncated"):
+        other.prepare(studio.gpu_scene)
+    assert other.values["pem"] == "" and other.bake is None
+    studio.render_offscreen(other, (32, 32))  # and draws again
+    studio.release()
     # turned after the bake (the viewer's rotation or turntable): the status says so
     session.render_offscreen(method, (32, 32))
     assert "views x 2 parts resident" in method.status_line()

@@ -120,6 +120,7 @@ class PemMethod(Method):
         self._thumbnails: list[moderngl.Texture] = []
         self._last_play: float | None = None
         self._moved = False
+        self._shown_pem = ""  # the ``pem`` value of what is on show (a failed load returns to it)
         self.last_blend: ViewBlend | None = None
 
     # -- loading ---------------------------------------------------------------------
@@ -144,8 +145,8 @@ class PemMethod(Method):
         ------
         InputFileError
             The file is missing, not a valid ``.pem``, or baked for another scene
-            or mesh; the bake shown before (if any) stays, and ``pem`` is set back
-            to its file.
+            or mesh; what was shown before stays (a bake, or the static EM), and
+            ``pem`` is set back to its value.
         """
         path, named = self._requested(scene)
         key = self._key(scene)
@@ -153,6 +154,7 @@ class PemMethod(Method):
             return
         if not named and not path.exists():
             self._release_loaded()
+            self._shown_pem = ""
             self._missing = (
                 f"no bake for scene {scene.scene.name!r} ({path.name}): showing the static EM; "
                 f"bake one with `envstudio bake pem --scene {scene.scene.name} -o FILE.pem` "
@@ -162,11 +164,9 @@ class PemMethod(Method):
         try:
             self.show(load_pem(path), scene, path, key)
         except InputFileError:
-            if self._loaded is not None:
-                previous = self._loaded.path
-                shipped = previous == shipped_bake(scene.scene.name)
-                self.values["pem"] = "" if shipped else str(previous)
+            self.values["pem"] = self._shown_pem  # what is on show stays, and so does its name
             raise
+        self._shown_pem = str(self.values["pem"])
 
     def show(self, bake: PemBake, scene: GpuScene, path: Path, key: tuple | None = None) -> None:
         """Verify ``bake`` against the scene, upload it and draw it from now on.
