@@ -152,8 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--chain",
         action="store_true",
-        help="with --prefilter: the GPU Phong cube mip chain instead (8 levels at 128² and 256², "
-        "time against cmft's and every level's error to the brute force)",
+        help="with --prefilter: the Phong cube mip chains instead, spectral (CPU) and GPU "
+        "(8 levels at 128² and 256², time against cmft's and every level's error to the "
+        "brute force)",
     )
     bench.add_argument(
         "--exponents",
@@ -364,7 +365,12 @@ def _add_prefilter_parser(sub) -> None:
     prefilter.add_argument("--lobe", help="lobe table: CSV of (cosine, value) rows (lobe only)")
     prefilter.add_argument("--kd", type=float, default=1.0, help="diffuse albedo k_d (diffuse)")
     prefilter.add_argument(
-        "--algo", choices=("brute", "hierarchical"), default="hierarchical", help="method"
+        "--algo",
+        choices=("brute", "hierarchical", "spectral"),
+        default=None,
+        help="method (default: hierarchical; with --chain spectral, or the GPU chain with "
+        "--device gpu); spectral (--chain only, on the CPU): the Phong brute force by rows and "
+        "azimuthal frequencies of the lat-long source, the fast CPU chain",
     )
     prefilter.add_argument(
         "--param",
@@ -404,8 +410,9 @@ def _add_prefilter_parser(sub) -> None:
         "--device",
         choices=("auto", "gpu", "cpu"),
         default="auto",
-        help="--chain: auto (default) filters on the GPU when a GL context can be made, else "
-        "on the CPU (hierarchical)",
+        help="--chain: gpu filters on the GPU (filtered importance sampling); with --algo "
+        "brute|hierarchical, auto (default) does so when a GL context can be made, else the CPU; "
+        "without --algo, auto and cpu take the spectral chain on the CPU",
     )
     prefilter.add_argument(
         "--samples",

@@ -294,8 +294,9 @@ def run_chain_bench(
     samples: int | None = None,
     repeats: int = 3,
     check: bool = True,
+    gpu: bool = True,
 ) -> dict:
-    """Time the GPU chain (prefilter.chain_gpu) at each face size; with ``check``, its errors.
+    """Time the CPU spectral chain and the GPU chain at each face size; with ``check``, errors.
 
     Parameters
     ----------
@@ -304,57 +305,105 @@ def run_chain_bench(
     sizes
         Level-0 face edges; each chain has 8 levels, gloss scale 10 and bias 1.
     samples
-        Level-0 samples (default prefilter.chain_gpu.DEFAULT_SAMPLES).
+        The GPU chain's level-0 samples (default prefilter.chain_gpu.DEFAULT_SAMPLES).
     repeats
-        Each time is the best of this many runs, after one untimed run that compiles
-        the program.
+        Each time is the best of this many runs. The GPU chain's come after one untimed
+        run that compiles the program; the spectral chain's after one *cold* run, timed
+        and reported apart, that builds its cached tables (prefilter.spectral.plan and
+        the interpolation matrices), which depend on the source's shape and N only.
     check
         Also every level's RMS and max difference to the brute force
         (render.prefilter_command.chain_level_error, 256 texels a level).
+    gpu
+        Also the GPU chain (prefilter.chain_gpu), when a GL context can be made.
 
     Returns
     -------
     dict
-        ``renderer``, ``context_seconds`` (making the context, not in the times),
-        ``samples`` and ``sizes``: per size ``seconds`` (best), ``runs``, cmft's seconds
-        and the speed-up over it, and ``levels`` (face, N, rms, max).
+        ``spectral``: per size ``cold_seconds``, ``seconds`` (best warm wall), ``cpu_seconds``
+        (its ``time.process_time``), ``runs``, cmft's seconds, the speed-up over them, and
+        ``levels`` (face, N, rms, max); ``gpu``: the same for the GPU chain (no cold run,
+        with ``renderer``, ``context_seconds``, ``samples``), or None without a context.
     """
+    from envstudio.prefilter import spectral
+    from envstudio.render.prefilter_command import chain_level_error
+
+    def levels_of(chain) -> list[dict]:
+        return [
+            {"face": level.faces.shape[1], "exponent": level.exponent}
+            | dict(zip(("rms", "max"), chain_level_error(radiance, level), strict=True))
+            for level in chain
+        ]
+
+    def timed(run: Callable[[], list]) -> tuple[list, float, float]:
+        wall, cpu = time.perf_counter(), time.process_time()
+        chain = run()
+        return chain, time.perf_counter() - wall, time.process_time() - cpu
+
+    def entry_for(size: int, runs: list[float], cpu: list[float], chain: list) -> dict:
+        best = int(np.argmin(runs))
+        entry = {"size": size, "seconds": runs[best], "cpu_seconds": cpu[best], "runs": runs}
+        if size in CMFT_SECONDS:
+            entry["cmft_seconds"] = CMFT_SECONDS[size]
+            entry["speedup_over_cmft"] = CMFT_SECONDS[size] / runs[best]
+        if check:
+            entry["levels"] = levels_of(chain)
+        return entry
+
+    report = {"load_average": os.getloadavg()[0], "spectral": {"sizes": []}, "gpu": None}
+    for size in sizes:
+        spectral.plan.cache_clear()
+        spectral.clear_lookups()
+        _, cold, _ = timed(lambda s=size: spectral.spectral_chain(radiance, s, 8, 10.0, 1.0))
+        runs, cpu, chain = [], [], None
+        for _ in range(repeats):
+            chain, wall, used = timed(
+                lambda s=size: spectral.spectral_chain(radiance, s, 8, 10.0, 1.0)
+            )
+            runs.append(wall)
+            cpu.append(used)
+        entry = entry_for(size, runs, cpu, chain)
+        entry["cold_seconds"] = cold
+        report["spectral"]["sizes"].append(entry)
+    if gpu:
+        report["gpu"] = _gpu_chain_bench(radiance, sizes, samples, repeats, timed, entry_for)
+    return report
+
+
+def _gpu_chain_bench(radiance, sizes, samples, repeats, timed, entry_for) -> dict | None:
+    """The GPU chain's part of :func:`run_chain_bench`; None without a GL context."""
+    from envstudio.errors import ContextError
     from envstudio.gpu.context import create_headless_context, describe
     from envstudio.gpu.programs import ProgramLibrary
     from envstudio.prefilter.chain_gpu import DEFAULT_SAMPLES, gpu_prefiltered_chain
-    from envstudio.render.prefilter_command import chain_level_error
 
     samples = DEFAULT_SAMPLES if samples is None else samples
     start = time.perf_counter()
-    ctx = create_headless_context()
+    try:
+        ctx = create_headless_context()
+    except ContextError:
+        return None
     context_seconds = time.perf_counter() - start
     programs = ProgramLibrary(ctx)
     report = {
         "renderer": describe(ctx),
         "context_seconds": context_seconds,
         "samples": samples,
-        "load_average": os.getloadavg()[0],
         "sizes": [],
     }
     try:
         for size in sizes:
-            gpu_prefiltered_chain(ctx, programs, radiance, size, 8, 10.0, 1.0, samples)
-            runs, chain = [], None
+
+            def run(s=size):
+                return gpu_prefiltered_chain(ctx, programs, radiance, s, 8, 10.0, 1.0, samples)
+
+            run()
+            runs, cpu, chain = [], [], None
             for _ in range(repeats):
-                start = time.perf_counter()
-                chain = gpu_prefiltered_chain(ctx, programs, radiance, size, 8, 10.0, 1.0, samples)
-                runs.append(time.perf_counter() - start)
-            entry = {"size": size, "seconds": min(runs), "runs": runs}
-            if size in CMFT_SECONDS:
-                entry["cmft_seconds"] = CMFT_SECONDS[size]
-                entry["speedup_over_cmft"] = CMFT_SECONDS[size] / min(runs)
-            if check:
-                entry["levels"] = [
-                    {"face": level.faces.shape[1], "exponent": level.exponent}
-                    | dict(zip(("rms", "max"), chain_level_error(radiance, level), strict=True))
-                    for level in chain
-                ]
-            report["sizes"].append(entry)
+                chain, wall, used = timed(run)
+                runs.append(wall)
+                cpu.append(used)
+            report["sizes"].append(entry_for(size, runs, cpu, chain))
     finally:
         programs.release()
         ctx.release()
@@ -362,20 +411,35 @@ def run_chain_bench(
 
 
 def format_chain_report(report: dict) -> str:
-    """The chain bench as text: time and speed-up per size, then each level's errors."""
-    lines = [
-        f"GPU chain on {report['renderer']}, {report['samples']} samples at level 0 "
-        f"(context {report['context_seconds']:.2f} s, not counted; "
-        f"load {report['load_average']:.1f})"
-    ]
-    for entry in report["sizes"]:
-        line = f"  {entry['size']}²: {entry['seconds']:.3f} s (best of {len(entry['runs'])})"
-        if "cmft_seconds" in entry:
-            line += f", cmft {entry['cmft_seconds']} s: {entry['speedup_over_cmft']:.2f}x"
-        lines.append(line)
-        for k, level in enumerate(entry.get("levels", [])):
-            lines.append(
-                f"    level {k}: {level['face']}² N = {level['exponent']:.4g}: "
-                f"rms {100 * level['rms']:.2f} %, max {100 * level['max']:.2f} % of the mean"
+    """The chain bench as text: per chain and size the time and speed-up, each level's errors."""
+    lines = [f"8-level Phong cube chains (load {report['load_average']:.1f}); cmft: issue 14"]
+    gpu = report.get("gpu")
+    parts = [("CPU spectral (prefilter.spectral)", report["spectral"])]
+    if gpu is None:
+        lines.append("GPU chain: no GL context")
+    else:
+        parts.append(
+            (
+                f"GPU chain on {gpu['renderer']}, {gpu['samples']} samples at level 0 "
+                f"(context {gpu['context_seconds']:.2f} s, not counted)",
+                gpu,
             )
+        )
+    for title, part in parts:
+        lines.append(title)
+        for entry in part["sizes"]:
+            line = (
+                f"  {entry['size']}²: {entry['seconds']:.3f} s, CPU {entry['cpu_seconds']:.3f} s "
+                f"(best of {len(entry['runs'])})"
+            )
+            if "cold_seconds" in entry:
+                line += f", cold (tables built) {entry['cold_seconds']:.3f} s"
+            if "cmft_seconds" in entry:
+                line += f"; cmft {entry['cmft_seconds']} s: {entry['speedup_over_cmft']:.2f}x"
+            lines.append(line)
+            for k, level in enumerate(entry.get("levels", [])):
+                lines.append(
+                    f"    level {k}: {level['face']}² N = {level['exponent']:.4g}: "
+                    f"rms {100 * level['rms']:.3f} %, max {100 * level['max']:.3f} % of the mean"
+                )
     return "\n".join(lines)

@@ -19,6 +19,7 @@ from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import read_environment, write_image
 from envstudio.prefilter import brute_force, hierarchical, kernels
+from envstudio.prefilter.parallel import default_threads
 from envstudio.prefilter.targets import target_directions, target_picture, target_shape
 
 __all__ = ["check_memory", "kernel_from_args", "run_prefilter", "run_prefilter_bench"]
@@ -110,6 +111,9 @@ def run_prefilter(args: argparse.Namespace) -> int:
     """``envstudio prefilter``: one prefiltered map, written as linear EXR."""
     if args.chain:
         return run_chain(args)
+    args.algo = args.algo or "hierarchical"
+    if args.algo == "spectral":
+        raise ParameterError("--algo spectral: only with --chain (brute or hierarchical here)")
     kernel = _checked_args(args)
     output = check_output_path(args.output)
     if output.suffix.lower() != ".exr":
@@ -175,11 +179,31 @@ def run_chain(args: argparse.Namespace) -> int:
     samples = getattr(args, "samples", 256)
     if not 1 <= samples <= 16384:
         raise ParameterError(f"--samples {samples}: expected 1..16384 importance samples")
+    algo = getattr(args, "algo", None)
+    if algo is None:  # the fast and accurate chain, unless the GPU is asked for
+        algo = "hierarchical" if device == "gpu" else "spectral"
+    spectral = algo == "spectral"
+    if spectral and device == "gpu":
+        raise ParameterError("--algo spectral --device gpu: the spectral chain runs on the CPU")
+    if spectral:
+        _check_spectral_memory(size)
     radiance = _source(args)
     check_memory(6 * size * size * 2, radiance.shape[0] * radiance.shape[1])
-    ctx = _chain_context(device)
+    ctx = None if spectral else _chain_context(device)
     start = time.perf_counter()
-    if ctx is not None:
+    if spectral:
+        from envstudio.prefilter.spectral import spectral_chain
+
+        chain = spectral_chain(
+            radiance,
+            size,
+            args.levels,
+            args.gloss_scale,
+            args.gloss_bias,
+            threads=args.threads or default_threads(),
+        )
+        where = "CPU (spectral)"
+    elif ctx is not None:
         from envstudio.gpu.context import describe
         from envstudio.gpu.programs import ProgramLibrary
         from envstudio.prefilter.chain_gpu import gpu_prefiltered_chain
@@ -242,6 +266,24 @@ def run_chain(args: argparse.Namespace) -> int:
             line += f", vs brute force: rms {100 * rms:.3f} %, max {100 * worst:.3f} % of the mean"
         print(line)
     return 0
+
+
+def _check_spectral_memory(size: int) -> None:
+    """Refuse a spectral chain whose interpolation matrices would not fit in free memory.
+
+    Level 0's matrix has 16 entries (4 B weight, 4 B column) per texel of 6 n², the levels
+    below a third more, and building one takes about as much again: some 2.5 kB per n².
+    """
+    need = 2560 * size * size
+    try:
+        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return
+    if need > free:
+        raise ParameterError(
+            f"--size {size}: the spectral chain needs about {need / 2**20:.0f} MiB of memory "
+            f"and {free / 2**20:.0f} MiB are free; choose a smaller --size"
+        )
 
 
 def _chain_context(device: str):
@@ -352,7 +394,7 @@ def run_prefilter_bench(args: argparse.Namespace) -> int:
 
 
 def _run_chain_bench(args: argparse.Namespace) -> int:
-    """``envstudio bench --prefilter --chain``: the GPU chain's time and errors."""
+    """``envstudio bench --prefilter --chain``: the spectral CPU and GPU chains, times, errors."""
     from envstudio.render.prefilter_bench import format_chain_report, run_chain_bench
     from envstudio.resources import asset_root
 
