@@ -115,6 +115,7 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
             ["a bake of scene 'room', expected one of 'studio'"],
         ),
         (["bake", "pem", "--scene", "room", "--elevations", "0", "-o", "OUT"], ["--elevations 0"]),
+        (["bake", "pem", "--scene", "room", "--tie", "-1", "-o", "OUT"], ["--tie -1", "[0, 10]"]),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):

@@ -322,6 +322,12 @@ def _add_bake_parser(sub) -> None:
         "--elevation-step", type=float, default=5.0, help="pem: degrees between grid rows (5)"
     )
     bake.add_argument(
+        "--tie",
+        type=float,
+        help="pem: weight μ of the coarse-to-fine MIP ties (default 1e-3; larger: coarse levels "
+        "nearer the decimated finest, steadier at small playback sizes, docs/pem)",
+    )
+    bake.add_argument(
         "--lookups",
         choices=("auto", "gl", "cpu"),
         default="auto",

@@ -37,6 +37,9 @@ DEFAULTS = {"views": 100, "step": 1.0, "size": 256, "samples": 4, "em_size": 64,
 def _check(args: argparse.Namespace) -> None:
     if args.env is not None:
         raise ParameterError("bake pem: --env is not used (the scene's environment is baked)")
+    tie = getattr(args, "tie", None)
+    if tie is not None and not (math.isfinite(tie) and 0.0 <= tie <= 10.0):
+        raise ParameterError(f"--tie {tie:g}: expected a weight in [0, 10]")
     if getattr(args, "elevations", 1) < 1:
         raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
@@ -87,6 +90,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 bar=bar,
                 scheduler=getattr(args, "scheduler", None),
                 lookups=getattr(args, "lookups", "auto"),
+                tie=getattr(args, "tie", None),
             )
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
             raise ParameterError(str(exc)) from None
