@@ -57,11 +57,8 @@ def check_memory(target_texels: int, source_texels: int) -> None:
     """
     threads = os.cpu_count() or 1
     need = 24 * target_texels + 100 * source_texels + threads * 16 * 8 * source_texels
-    try:
-        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return
-    if need > free:
+    free = _free_memory()
+    if free is not None and need > free:
         raise ParameterError(
             f"--size/--source-height: this prefilter needs about {need / 2**20:.0f} MiB of memory "
             f"and {free / 2**20:.0f} MiB are free; choose a smaller --size or --source-height"
@@ -268,6 +265,14 @@ def run_chain(args: argparse.Namespace) -> int:
     return 0
 
 
+def _free_memory() -> int | None:
+    """Bytes of physical memory free now, None where the system does not say."""
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
 def _check_spectral_memory(size: int) -> None:
     """Refuse a spectral chain whose interpolation matrices would not fit in free memory.
 
@@ -275,11 +280,8 @@ def _check_spectral_memory(size: int) -> None:
     below a third more, and building one takes about as much again: some 2.5 kB per n².
     """
     need = 2560 * size * size
-    try:
-        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return
-    if need > free:
+    free = _free_memory()
+    if free is not None and need > free:
         raise ParameterError(
             f"--size {size}: the spectral chain needs about {need / 2**20:.0f} MiB of memory "
             f"and {free / 2**20:.0f} MiB are free; choose a smaller --size"
