@@ -214,6 +214,10 @@ def test_a_bake_of_another_scene_or_mesh_is_refused_and_the_previous_one_stays(g
     with pytest.raises(InputFileError, match=r"baked with .* triangles.*re-bake"):
         method.show(other, session.gpu_scene, Path("mesh.pem"))
     other = _fake_bake(scene, box, ellipsoids)
+    other.mesh_checks = other.mesh_checks[:1]
+    with pytest.raises(InputFileError, match="1 mesh checks and 2 hull masks for 2 parts"):
+        method.show(other, session.gpu_scene, Path("short.pem"))
+    other = _fake_bake(scene, box, ellipsoids)
     other.mesh_checks[1] = {**other.mesh_checks[1], "sha256": "0" * 64}
     with pytest.raises(InputFileError, match="'lid' was baked from another mesh"):
         method.show(other, session.gpu_scene, Path("moved.pem"))

@@ -39,6 +39,11 @@ def check_bake_for_scene(bake: PemBake, scene: Scene, path: Path) -> None:
             f"{path}: reflector parts {', '.join(bake.parts)}, expected {', '.join(parts)}"
         )
     checks = list(getattr(bake, "mesh_checks", [])) or [None] * len(parts)
+    if len(checks) != len(parts) or len(bake.hull) != len(parts):
+        raise InputFileError(
+            f"{path}: {len(checks)} mesh checks and {len(bake.hull)} hull masks for "
+            f"{len(parts)} parts: re-bake"
+        )
     for node, hull, baked in zip(scene.reflectors(), bake.hull, checks, strict=True):
         here = mesh_check(node)
         if len(hull) != here["triangles"]:
