@@ -49,6 +49,7 @@ case "$command" in
     test)
         .venv/bin/ruff check .
         .venv/bin/ruff format --check .
+        .venv/bin/lint-imports
         OPENBLAS_NUM_THREADS=1 exec .venv/bin/pytest -q "$@" ;;
     envstudio) exec .venv/bin/envstudio "$@" ;;
     *) echo "run.sh: unknown command '$command' (expected view, test or envstudio)" >&2; exit 2 ;;

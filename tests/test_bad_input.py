@@ -11,7 +11,7 @@ import pytest
 
 from envstudio.cli import main
 from envstudio.io.images import write_image
-from envstudio.methods.pem import shipped_bake
+from envstudio.methods.pem.method import shipped_bake
 from envstudio.resources import asset_root
 
 BUNNY = str(asset_root() / "mesh" / "bunny.ply")

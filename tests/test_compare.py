@@ -11,15 +11,11 @@ import pytest
 from envstudio.cli import main
 from envstudio.core.latlong import texel_directions
 from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
+from envstudio.core.parameters import Parameter
 from envstudio.io.images import read_image, write_image
-from envstudio.methods.base import Method
-from envstudio.methods.hwconv import method as hwconv_method
-from envstudio.methods.parameters import Parameter
-from envstudio.methods.reference import ReferenceMethod
-from envstudio.render.compare import plan_parameters
-from envstudio.render.hwconv_accuracy import MODES, run_accuracy
-from envstudio.render.session import RenderSession
-from envstudio.render.stopping import (
+from envstudio.io.scene_setup import build_scene
+from envstudio.measure.compare import plan_parameters
+from envstudio.measure.stopping import (
     NOISE_RULE,
     NOISE_SHARE,
     TOLERANCE_RULE,
@@ -27,7 +23,11 @@ from envstudio.render.stopping import (
     ReferenceJudge,
     choose_rule,
 )
-from envstudio.scene_setup import build_scene
+from envstudio.methods.hwconv import method as hwconv_method
+from envstudio.methods.hwconv.accuracy import MODES, run_accuracy
+from envstudio.methods.reference.method import ReferenceMethod
+from envstudio.render.method import Method
+from envstudio.render.session import RenderSession
 
 FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
 

@@ -8,8 +8,8 @@ import time
 import numpy as np
 import pytest
 
-from envstudio.methods.reference import is_checkpoint, project_convergence
-from envstudio.render.convergence import format_convergence, run_convergence
+from envstudio.measure.convergence import format_convergence, run_convergence
+from envstudio.methods.reference.method import is_checkpoint, project_convergence
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_reference_gl import smooth_environment

@@ -6,7 +6,7 @@ from envstudio.core import latlong
 from envstudio.core.env_sampling import EnvironmentDistribution, luminance
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.images import read_environment
-from envstudio.methods.reference import _EnvironmentTables
+from envstudio.methods.reference.method import _EnvironmentTables
 from envstudio.resources import asset_root
 
 

@@ -8,14 +8,14 @@ from envstudio.core import latlong
 from envstudio.core.colormap import magma
 from envstudio.errors import ParameterError
 from envstudio.io.images import read_image
-from envstudio.prefilter.brute_force import phong
-from envstudio.render.hwconv_accuracy import (
+from envstudio.methods.hwconv.accuracy import (
     MODES,
     error_image_panels,
     format_accuracy,
     run_accuracy,
     write_error_images,
 )
+from envstudio.prefilter.brute_force import phong
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_bad_input import assert_one_line_error, run_cli

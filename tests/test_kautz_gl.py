@@ -17,7 +17,7 @@ from envstudio.envmap.dynamic_cube import DynamicCube, face_view
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, edge_jumps, mipmapped_cube
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.kautz import STATIC_HEIGHT
+from envstudio.methods.kautz.method import STATIC_HEIGHT
 from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment

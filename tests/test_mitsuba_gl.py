@@ -70,7 +70,7 @@ import pytest
 import mitsuba_scene as ms
 from envstudio.core import latlong
 from envstudio.io.meshes import load_mesh
-from envstudio.methods import tracing
+from envstudio.methods.reference import tracing
 from envstudio.render.session import RenderSession
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
@@ -109,7 +109,7 @@ Z_BOUND, Z_INSIDE = 4.5, 0.99
 
 
 def max_depth(bounces: int) -> int:
-    """Mitsuba's ``max_depth`` for our ``u_trace_bounces`` (methods/tracing.py).
+    """Mitsuba's ``max_depth`` for our ``u_trace_bounces`` (methods/reference/tracing.py).
 
     From the first hit our traced path (reference/paths.glsl) follows at most
     ``bounces`` segments, continuing at each reflector it meets and taking

@@ -2,9 +2,9 @@
 
 import pytest
 
+from envstudio.core.parameters import Parameter, ParameterValues, parse_assignments
 from envstudio.errors import ParameterError
-from envstudio.methods.base import available_methods, method_class
-from envstudio.methods.parameters import Parameter, ParameterValues, parse_assignments
+from envstudio.render.registry import available_methods, method_class
 
 
 def test_values_are_validated_and_converted():

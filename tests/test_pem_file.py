@@ -1,4 +1,4 @@
-"""The .pem file and the bake job (seed 003 §3, §4): bake/pem/pem_file.py, bake/pem/bake.py."""
+"""The .pem file and the bake job (seed 003 §3, §4): methods/pem/bake/pem_file.py and bake.py."""
 
 from __future__ import annotations
 
@@ -7,16 +7,18 @@ import json
 import numpy as np
 import pytest
 
-from envstudio.bake.pem import SceneTracer
-from envstudio.bake.pem import bake as bake_module
-from envstudio.bake.pem.bake import ViewTask, bake_view, parts_folder, run_bake
-from envstudio.bake.pem.hull import mesh_check, reflector_hulls
-from envstudio.bake.pem.lookups import MODELS, PLAYBACK
-from envstudio.bake.pem.pem_file import MAGIC, PemBake, load_pem, save_pem
-from envstudio.bake.pem.views import arc_views
 from envstudio.cli import main
 from envstudio.errors import InputFileError
 from envstudio.io.scene_file import load_scene, resolve_scene
+from envstudio.methods.pem.bake import SceneTracer
+from envstudio.methods.pem.bake import bake as bake_module
+from envstudio.methods.pem.bake.bake import ViewTask, bake_view, parts_folder
+from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
+from envstudio.methods.pem.bake.lookups import MODELS, PLAYBACK
+from envstudio.methods.pem.bake.pem_file import MAGIC, PemBake, load_pem, save_pem
+from envstudio.methods.pem.bake.views import arc_views
+from envstudio.methods.pem.commands import run_bake
+from envstudio.methods.pem.lookups_gl import GlLookups
 
 TINY = {"size": 32, "samples": 2, "em_size": 4, "workers": 0}
 
@@ -67,6 +69,7 @@ def test_round_trip_equals_inference(baked):
         4,
         1e-3,
         0,
+        gl_lookups=GlLookups,  # what run_bake gives the workers where GL is
     )
     direct = bake_view(task)
     for m in MODELS:

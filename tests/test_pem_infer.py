@@ -1,12 +1,12 @@
-"""EM inference of the PEM bake (seed 003 §4, "EM Inference", "Layered EMs"): bake/pem/infer."""
+"""EM inference of the PEM bake (seed 003 §4, "EM Inference", "Layered EMs"): pem/bake/infer."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from envstudio.bake.pem import SceneTracer
-from envstudio.bake.pem.infer import (
+from envstudio.methods.pem.bake import SceneTracer
+from envstudio.methods.pem.bake.infer import (
     BoxGeometry,
     distant_box,
     em_origin,

@@ -5,20 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from envstudio.bake.pem import SceneTracer
-from envstudio.bake.pem.hull import hull_mask, mesh_check, node_world_mesh, reflector_hulls
-from envstudio.bake.pem.infer import distant_box, infer_mip, local_ellipsoid
-from envstudio.bake.pem.lookups import MODELS, pixel_lookups, trilinear_matrix
-from envstudio.bake.pem.mip import decimate, decimated_chain, level_offsets, mip_sizes
-from envstudio.bake.pem.models import (
+from envstudio.core.cubemap import direction_to_uv
+from envstudio.methods.pem.bake import SceneTracer
+from envstudio.methods.pem.bake.hull import hull_mask, mesh_check, node_world_mesh, reflector_hulls
+from envstudio.methods.pem.bake.infer import distant_box, infer_mip, local_ellipsoid
+from envstudio.methods.pem.bake.lookups import MODELS, pixel_lookups, trilinear_matrix
+from envstudio.methods.pem.bake.mip import decimate, decimated_chain, level_offsets, mip_sizes
+from envstudio.methods.pem.bake.models import (
     fit_pixels,
     infer_view_models,
     playback_psnr,
     predict,
     static_em,
 )
-from envstudio.bake.pem.pem_file import decode_levels, encode_levels
-from envstudio.core.cubemap import direction_to_uv
+from envstudio.methods.pem.bake.pem_file import decode_levels, encode_levels
 from envstudio.scene.graph import Node, Transform
 from envstudio.scene.primitives import uv_sphere
 

@@ -1,10 +1,10 @@
 """Method ``pem`` (issue 19): playback equals the bake's rendering matrix, texgen, bad input.
 
 The bake infers maps x through A, the trilinear lookups the playback shader makes
-(bake/pem/lookups.py); a playback that drew anything else would not reproduce
+(methods/pem/bake/lookups.py); a playback that drew anything else would not reproduce
 A·x. Here random multi-level maps are played back at a sampled view and
 compared with A·x over every reflector pixel, A built from the lookups the
-playback shader writes (bake/pem/lookups_gl.py).
+playback shader writes (methods/pem/lookups_gl.py).
 """
 
 from pathlib import Path
@@ -13,21 +13,26 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from envstudio.bake.pem.hull import mesh_check
-from envstudio.bake.pem.infer import BoxGeometry, EllipsoidGeometry, distant_box, local_ellipsoid
-from envstudio.bake.pem.lookups import CHANNELS, MODELS
-from envstudio.bake.pem.lookups_gl import GlLookups
-from envstudio.bake.pem.mip import mip_sizes
-from envstudio.bake.pem.trace import SceneTracer
 from envstudio.errors import InputFileError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.scene_file import load_scene
-from envstudio.methods.pem import shipped_bake
 from envstudio.methods.pem.atlas import flat_maps
+from envstudio.methods.pem.bake.hull import mesh_check
+from envstudio.methods.pem.bake.infer import (
+    BoxGeometry,
+    EllipsoidGeometry,
+    distant_box,
+    local_ellipsoid,
+)
+from envstudio.methods.pem.bake.lookups import CHANNELS, MODELS
+from envstudio.methods.pem.bake.mip import mip_sizes
+from envstudio.methods.pem.bake.trace import SceneTracer
+from envstudio.methods.pem.lookups_gl import GlLookups
+from envstudio.methods.pem.method import shipped_bake
 from envstudio.render.session import RenderSession
 
 R, N = 48, 8
-LOD_BIAS = -1.0  # a bake's level bias (bake/pem/lookups.py): the playback adds it too
+LOD_BIAS = -1.0  # a bake's level bias (methods/pem/bake/lookups.py): the playback adds it too
 
 
 @pytest.fixture(scope="module")

@@ -1,12 +1,12 @@
-"""Segmented ray tracer of the PEM bake (seed 003 §3–4, Figure 4): bake/pem/trace and views."""
+"""Segmented ray tracer of the PEM bake (seed 003 §3–4, Figure 4): pem/bake/trace and views."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from envstudio.bake.pem import SceneTracer, arc_views, grid_views
 from envstudio.core.fresnel import schlick
+from envstudio.methods.pem.bake import SceneTracer, arc_views, grid_views
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene, Transform

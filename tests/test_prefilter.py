@@ -21,9 +21,9 @@ from envstudio.core import cubemap, latlong
 from envstudio.io.dds import write_dds_cube
 from envstudio.io.images import read_environment, read_image
 from envstudio.prefilter import brute_force, hierarchical, kernels, spectral
+from envstudio.prefilter.bench import run_prefilter_bench, write_scaling_plot
 from envstudio.prefilter.chain import gloss_exponents, prefiltered_chain
 from envstudio.prefilter.targets import target_directions, target_picture
-from envstudio.render.prefilter_bench import run_prefilter_bench, write_scaling_plot
 from envstudio.resources import asset_root
 
 SUNRISE = str(asset_root() / "hdr" / "sunrise.exr")
@@ -618,7 +618,7 @@ def test_spectral_needs_the_chain(tmp_path, capsys):
 
 
 def test_chain_bench_reports_the_spectral_chain():
-    from envstudio.render.prefilter_bench import format_chain_report, run_chain_bench
+    from envstudio.prefilter.bench import format_chain_report, run_chain_bench
 
     report = run_chain_bench(smooth_map(64, seed=6), sizes=(16,), repeats=1, gpu=False)
     (entry,) = report["spectral"]["sizes"]

@@ -9,8 +9,9 @@ import pytest
 
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
-from envstudio.render import reference_cache
-from envstudio.render.reference_cache import cache_limit_bytes, load_state, prune, save_state
+from envstudio.measure import ground_truth_cache
+from envstudio.measure.ground_truth_cache import cache_limit_bytes, load_state, prune, save_state
+from envstudio.methods.reference import method as reference_method
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_render_gl import sphere_scene
@@ -68,8 +69,8 @@ def test_the_key_follows_the_estimators_shaders_and_their_includes_only(gl_ctx, 
         def read(name: str) -> str:
             return read_shader(name) + ("// edited\n" if name == edited else "")
 
-        monkeypatch.setattr(reference_cache, "read_shader", read)
-        return reference_cache.cache_path(session, reference, (32, 32))
+        monkeypatch.setattr(reference_method, "read_shader", read)
+        return ground_truth_cache.cache_path(session, reference, (32, 32))
 
     base = key_with_edited(None)
     for included in ("common/sobol.glsl", "reference/trace.glsl", "reference/merge_batch.glsl"):
@@ -82,12 +83,12 @@ def test_the_key_follows_the_estimators_shaders_and_their_includes_only(gl_ctx, 
 def test_the_key_leaves_out_only_when_to_stop_and_how_batches_are_drawn(gl_ctx):
     session = RenderSession(sphere_scene(Environment.constant([1.0, 1.0, 1.0])), ctx=gl_ctx)
     reference = session.method("reference")
-    base = reference_cache.cache_path(session, reference, (32, 32))
+    base = ground_truth_cache.cache_path(session, reference, (32, 32))
     reference.values.update({"max_samples": 5, "tolerance": 0.01, "samples_per_draw": 2})
-    assert reference_cache.cache_path(session, reference, (32, 32)) == base
+    assert ground_truth_cache.cache_path(session, reference, (32, 32)) == base
     for name, value in (("samples", 4), ("kd", 0.5), ("sequence", "random")):
         default = reference.values[name]
         reference.values[name] = value
-        assert reference_cache.cache_path(session, reference, (32, 32)) != base, name
+        assert ground_truth_cache.cache_path(session, reference, (32, 32)) != base, name
         reference.values[name] = default
     session.release()

@@ -11,7 +11,7 @@ came out 0.57 of the untraced ones over most of the sphere and 1.0 only at
 the pixel facing the camera.
 
 The microfacet model is used because it clips its lobe at the horizon traced
-or not; the eq. 7 Phong lobe is left whole without tracing (methods/reference.py),
+or not; the eq. 7 Phong lobe is left whole without tracing (methods/reference/method.py),
 so there traced and untraced differ by design wherever the lobe crosses the horizon.
 """
 

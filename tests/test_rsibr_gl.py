@@ -5,16 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from envstudio.bake.rsibr import bake as rb
 from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import read_texture
+from envstudio.io.scene_setup import build_scene
+from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.generator import MapGenerator
 from envstudio.render.session import RenderSession
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene.primitives import uv_sphere
-from envstudio.scene_setup import build_scene
 
 N = 64
 
@@ -120,7 +120,7 @@ def test_figure_rsibr_warp_writes_figure_4_whose_generated_panel_is_the_method_m
 ):
     from envstudio.cli import main
     from envstudio.io.images import read_image
-    from envstudio.methods.rsibr.figure import to_ldr, upright
+    from envstudio.render.images import to_ldr, upright
 
     output = tmp_path / "figure4.png"
     argv = ["figure", "rsibr-warp", "--param", "map_size=32", "--size", "64x64", "-o", output]

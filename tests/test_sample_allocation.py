@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from envstudio.methods.sample_allocation import (
+from envstudio.methods.reference.sample_allocation import (
     MAX_MULTIPLIER,
     REFERENCE_PERCENTILE,
     SampleAllocation,

@@ -64,7 +64,7 @@ def test_tangent_fields(tmp_path, text, sharpness, field):
 
 
 def test_models_match_the_reference():
-    from envstudio.methods.reference import MODELS as REFERENCE_MODELS
+    from envstudio.methods.reference.method import MODELS as REFERENCE_MODELS
 
     assert MODELS == REFERENCE_MODELS
 

@@ -13,7 +13,7 @@ from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.io.scene_file import load_scene
-from envstudio.methods import kautz
+from envstudio.methods.kautz import method as kautz
 from envstudio.render.session import RenderSession
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene, Transform

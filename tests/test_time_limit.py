@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from imgui_bundle import imgui
 
-from envstudio.methods.parameters import ParameterValues
-from envstudio.methods.reference import (
+from envstudio.core.parameters import ParameterValues
+from envstudio.measure import ground_truth_cache
+from envstudio.methods.reference.method import (
     SCHEDULING_PARAMETERS,
     ReferenceMethod,
     median_relative_error,
 )
-from envstudio.render import reference_cache
 from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from envstudio.ui.parameter_widgets import parameter_widgets
@@ -30,10 +30,10 @@ def test_a_time_limit_stops_the_reference_and_its_status_line_shows_the_noise(gl
     reference = session.method("reference")
     reference.values.update({"trace": False, "tolerance": 1e-5, "samples": 4})
     reference.values["max_samples"] = 10_000_000
-    key = reference_cache.cache_path(session, reference, SIZE)
+    key = ground_truth_cache.cache_path(session, reference, SIZE)
     reference.values["time_limit"] = 0.6
     assert "time_limit" in SCHEDULING_PARAMETERS
-    assert reference_cache.cache_path(session, reference, SIZE) == key, "not part of the key"
+    assert ground_truth_cache.cache_path(session, reference, SIZE) == key, "not part of the key"
     start = time.perf_counter()
     session.render_offscreen(reference, SIZE)
     while not reference.finished() and time.perf_counter() - start < 30:

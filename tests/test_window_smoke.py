@@ -21,9 +21,9 @@ import pytest
 from imgui_bundle import imgui
 
 from envstudio.io.images import read_image
-from envstudio.methods.base import available_methods
+from envstudio.io.scene_setup import build_scene
+from envstudio.render.registry import available_methods
 from envstudio.render.session import RenderSession
-from envstudio.scene_setup import build_scene
 from envstudio.ui.app import CYCLE_FRAMES
 from envstudio.ui.panels import default_layout
 

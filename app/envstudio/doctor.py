@@ -299,7 +299,7 @@ def _check_folders(report: Report) -> None:
         report.missing("the shaders and assets folders", _pip(f"--force-reinstall {DISTRIBUTION}"))
     folders = []
     try:
-        from envstudio.render.reference_cache import cache_dir
+        from envstudio.measure.ground_truth_cache import cache_dir
 
         override = " ($ENVSTUDIO_CACHE_DIR)" if os.environ.get("ENVSTUDIO_CACHE_DIR") else ""
         folders.append(("cache", cache_dir(), override))

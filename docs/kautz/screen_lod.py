@@ -23,8 +23,8 @@ from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import preprocess
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.io.scene_file import load_scene
-from envstudio.methods.base import Method
-from envstudio.methods.context import FrameInputs
+from envstudio.render.gpu_scene import FrameInputs
+from envstudio.render.method import Method
 from envstudio.render.session import RenderSession
 
 PROBE_NAME = "screen_lod_probe.glsl"

@@ -10,7 +10,6 @@ import time
 
 import numpy as np
 
-from envstudio.bake.rsibr.gpu import GpuBaker, bake_gpu
 from envstudio.core import icosahedron as ico
 from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import latlong_to_cube, read_texture, upload_latlong
@@ -18,6 +17,7 @@ from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.io.images import read_environment
 from envstudio.methods.rsibr.generator import MapGenerator
+from envstudio.methods.rsibr.gpu_bake import GpuBaker, bake_gpu
 
 env_path, n = sys.argv[1], int(sys.argv[2])
 ctx = create_headless_context()

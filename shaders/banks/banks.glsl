@@ -13,7 +13,7 @@
 // interpolated tangent, normal and position.
 #include "common/paraboloid.glsl"
 #include "banks/lookup.glsl"
-#include "banks/brdf.glsl"
+#include "common/banks_brdf.glsl"
 #if defined VERTEX_SHADER
 #include "common/mesh_world.glsl"
 #include "common/mesh_tangent.glsl"

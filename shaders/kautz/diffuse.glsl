@@ -1,6 +1,6 @@
 // The diffuse term of method `kautz`: irradiance E(n) from the uniform block
 // KautzDiffuse, which core.sh_lights.DiffuseLighting.block (static environments)
-// or kautz/reduce.glsl (dynamic ones, on the GPU) fills:
+// or prefilter/sh_reduce.glsl (dynamic ones, on the GPU) fills:
 //   u_sh[i]              vec4(A_l L_i, 0): SH coefficients already convolved with the
 //                        clamped cosine (seed 000 eq. 12), storage order of
 //                        common/sh_bands.glsl

@@ -36,10 +36,10 @@ void main() {
 #include "common/random.glsl"
 #include "common/sobol.glsl"
 #include "common/fresnel.glsl"
-#include "reference/sampling.glsl"
+#include "common/sampling.glsl"
 #include "reference/material.glsl"
 #include "reference/radiance.glsl"
-#include "banks/brdf.glsl"
+#include "common/banks_brdf.glsl"
 
 uniform vec3 u_camera_position;
 uniform int u_samples;

@@ -1,6 +1,6 @@
 // The reflector's material for the reference (methods/reference.py): its
 // uniforms and one-sample BRDF sampling, used wherever a path continues at a
-// reflector (paths.glsl). Needs common/fresnel.glsl and reference/sampling.glsl.
+// reflector (paths.glsl). Needs common/fresnel.glsl and common/sampling.glsl.
 //   model 0 (seed 000 eq. 8): (1 - F) k_d / pi (n.l) + F (N+1)/2pi (r.l)^N, F = Schlick(n.v);
 //   model 1 (microfacet): k_d / pi (1 - F(n.v)) (n.l) + GGX D G2 F(v.h) / (4 n.v);
 //   model 2 (banks): a traced path that meets a reflector again ends there (black):

@@ -15,7 +15,7 @@
 #include "common/fullscreen_vs.glsl"
 #elif defined FRAGMENT_SHADER
 #include "common/fresnel.glsl"
-#include "reference/sampling.glsl"
+#include "common/sampling.glsl"
 uniform samplerCube u_environment;
 uniform float u_cube_size;     // level-0 face edge, texels
 uniform mat3 u_frame;

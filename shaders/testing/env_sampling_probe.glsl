@@ -1,12 +1,12 @@
 #version 330 core
-// Test probe: each pixel draws one environment sample (reference/sampling.glsl)
+// Test probe: each pixel draws one environment sample (common/sampling.glsl)
 // and writes its direction and pdf, so tests can compare the GPU sampler with
 // core/env_sampling.py.
 #if defined VERTEX_SHADER
 #include "common/fullscreen_vs.glsl"
 #elif defined FRAGMENT_SHADER
 #include "common/random.glsl"
-#include "reference/sampling.glsl"
+#include "common/sampling.glsl"
 out vec4 f_sample;
 
 void main() {

@@ -9,7 +9,7 @@ the environment at infinity is drawn over the whole strip by one full-screen
 triangle (each pixel looks up its face texel's direction), and every local
 object (diffuse, lit by the environment's SH9, as the frame's local pass does)
 by one draw of six instances, instance f seen by face camera f and clipped to
-its sixth of the strip (shaders/kautz/capture_local.glsl). A compute pass then
+its sixth of the strip (shaders/envmap/capture_local.glsl). A compute pass then
 copies the strip into the cube's faces (moderngl cannot attach a cube face to a
 framebuffer). Six passes cost six clears, six background draws, six draws per
 object and twelve copies, each issued from Python; on the H100 they took
@@ -153,8 +153,8 @@ class DynamicCube:
         centre
             (3,) float, world-space capture point (the reflector's centre).
         """
-        background = self.programs.get("kautz/capture_background.glsl")
-        local = self.programs.get("kautz/capture_local.glsl")
+        background = self.programs.get("envmap/capture_background.glsl")
+        local = self.programs.get("envmap/capture_local.glsl")
         centre_key = tuple(float(c) for c in np.asarray(centre).ravel())
         if centre_key != self._centre:
             self._views = np.stack([face_view(face, centre_key) for face in range(6)])
@@ -185,8 +185,8 @@ class DynamicCube:
             self._copy_by_buffer()
 
     def _copy_by_compute(self) -> None:
-        """Strip → level 0 of the faces in one compute pass (shaders/kautz/capture_copy.glsl)."""
-        copy = self.programs.compute("kautz/capture_copy.glsl")
+        """Strip → level 0 of the faces in one compute pass (shaders/envmap/capture_copy.glsl)."""
+        copy = self.programs.compute("envmap/capture_copy.glsl")
         self._strip.use(location=0)
         set_uniform(copy, "u_strip", 0)
         set_uniform(copy, "u_size", self.size)

@@ -5,7 +5,7 @@ mip-map generation, a 2 × 2 box filter inside each face. Section 6 (Figure 4)
 names its drawback: every face is filtered alone, so at a high level the six faces
 hold six unrelated averages and their borders show when the LOD bias b is large.
 :func:`build_cross_face_mipmaps` rebuilds levels 1 … with
-shaders/kautz/cross_face_mip.glsl, a tent filter whose footprint continues across
+shaders/envmap/cross_face_mip.glsl, a tent filter whose footprint continues across
 face edges; :func:`edge_jumps` measures what is left of the seam.
 
 Both need textures with storage for every level: :func:`mipmapped_cube` makes one.
@@ -24,7 +24,7 @@ from envstudio.gpu.uniforms import set_uniform
 
 __all__ = ["build_cross_face_mipmaps", "edge_jumps", "mipmapped_cube"]
 
-_PROGRAM = "kautz/cross_face_mip.glsl"
+_PROGRAM = "envmap/cross_face_mip.glsl"
 
 
 def mipmapped_cube(ctx: moderngl.Context, size: int) -> moderngl.TextureCube:

@@ -7,6 +7,7 @@ recompiles. :attr:`ProgramLibrary.compile_count` lets tests assert that.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 
 import moderngl
 
@@ -18,9 +19,31 @@ class ShaderCompileError(RuntimeError):
     """A shader failed to compile or link; the message names file and line."""
 
 
+#: Plugins' shader folders by name: ``<name>/<file>`` is read from there.
+_PLUGIN_FOLDERS: dict[str, Path] = {}
+
+
+def add_shader_folder(folder: Path) -> None:
+    """Read ``<folder.name>/<file>`` from ``folder`` (a plugin's own GLSL, its includes too)."""
+    _PLUGIN_FOLDERS[folder.name] = folder
+
+
+def shader_folder_names() -> set[str]:
+    """Names a plugin's shader folder may not take: the shipped folders and those added."""
+    return {p.name for p in shader_root().iterdir() if p.is_dir()} | set(_PLUGIN_FOLDERS)
+
+
+def shader_path(name: str) -> Path:
+    """The file of shader ``name`` (``folder/file.glsl``): a plugin's folder, else ``shaders/``."""
+    folder, _, rest = name.partition("/")
+    if folder in _PLUGIN_FOLDERS and rest:
+        return _PLUGIN_FOLDERS[folder] / rest
+    return shader_root() / name
+
+
 def read_shader(name: str) -> str:
-    """Return the text of ``shaders/<name>``; raises ``FileNotFoundError``."""
-    path = shader_root() / name
+    """Return the text of shader ``name`` (:func:`shader_path`); raises ``FileNotFoundError``."""
+    path = shader_path(name)
     if not path.is_file():
         raise FileNotFoundError(name)
     return path.read_text(encoding="utf-8")

@@ -51,7 +51,7 @@ from envstudio.scene.mesh import MeshData, loop_subdivided
 from envstudio.scene.primitives import box, uv_sphere
 from envstudio.scene.tangents import AXES, FIELDS, TangentField
 
-#: The reference's BRDF models a material may name (methods/reference.py MODELS).
+#: The reference's BRDF models a material may name (methods/reference/method.py MODELS).
 MODELS = ("phong", "microfacet", "banks")
 #: The largest Banks sharpness the methods accept (their ``sharpness`` parameter).
 SHARPNESS_MAX = 0.9999

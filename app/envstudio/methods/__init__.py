@@ -1,13 +1,8 @@
-"""Renderers: one module per method, each registers itself with its declared parameters."""
+"""envmap-studio's methods, one plugin package each (entry points in pyproject.toml).
 
-from envstudio.methods import kautz, mirror, reference  # noqa: F401
-
-# isort: split
-from envstudio.methods import hwconv  # noqa: F401  (registered after: keys 1-3 stay)
-from envstudio.methods.banks import method as _banks  # noqa: F401  (after hwconv: key 5)
-
-# isort: split
-from envstudio.methods.rsibr import method as _rsibr  # noqa: F401  (seed 002)
-
-# isort: split
-from envstudio.methods.pem import method as _pem  # noqa: F401  (seed 003)
+Each ``methods/<m>/`` holds everything about its technique: ``method.py`` (the
+renderer), ``plugin.py`` (what it adds to the commands), its GL-free ``bake/``
+where it has one, its commands, figures, bench tables and report sections. A
+package here imports :mod:`envstudio.plugin` and the library below it, never
+another method.
+"""

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.prefilter import hierarchical, kernels
+from envstudio.prefilter import brute_force, hierarchical, kernels
 from envstudio.prefilter.targets import target_directions
 
 __all__ = ["ChainLevel", "gloss_exponents", "prefiltered_chain"]
@@ -105,3 +105,23 @@ def prefiltered_chain(
         )
         chain.append(ChainLevel(faces, exponent, rows))
     return chain
+
+
+def chain_level_error(radiance: np.ndarray, level, samples: int = 256) -> tuple[float, float]:
+    """RMS and max |level − brute force| over the level's mean, at sampled texels.
+
+    The brute force (:func:`envstudio.prefilter.brute_force.prefilter`) sums the full-resolution
+    source at the level's exponent, at ``samples`` texels spread evenly over the
+    faces (every k-th); both errors are relative to the brute-force mean there.
+    """
+    n = level.faces.shape[1]
+    directions = target_directions("cube", n).reshape(-1, 3)
+    stride = max(1, len(directions) // samples)
+    truth = brute_force.prefilter(
+        radiance, directions[::stride], kernels.phong(level.exponent)
+    ).astype(np.float64)
+    got = level.faces.reshape(-1, 3)[::stride]
+    mean = truth.mean()
+    return float(np.sqrt(np.mean((got - truth) ** 2)) / mean), float(
+        np.abs(got - truth).max() / mean
+    )

@@ -4,12 +4,12 @@ The GPU twin of :class:`envstudio.core.sh_lights.DiffuseProjector` for cube maps
 used when the environment changes every frame (method ``kautz`` with ``dynamic``):
 no pixel leaves the GPU. Three compute dispatches (OpenGL 4.3):
 
-1. shaders/kautz/project.glsl, PASS 1 — one work group per cube-face tile
+1. shaders/prefilter/sh_project.glsl, PASS 1 — one work group per cube-face tile
    (8 × 8 tiles per face): Σ L Y_i Δω per coefficient and channel, and Σ lum Δω;
 2. the same file, PASS 2 (only with lights) — the threshold T = τ · mean luminance
    from the tile powers, then the same sums for the excess above T, its luminance
    moment, power and RGB power;
-3. shaders/kautz/reduce.glsl — one work group: ranks the tiles by excess power,
+3. shaders/prefilter/sh_reduce.glsl — one work group: ranks the tiles by excess power,
    turns the strongest into cap lights, sums the rest into the SH coefficients,
    multiplies by Â_l and writes the uniform block rows of shaders/kautz/diffuse.glsl.
 """
@@ -88,17 +88,17 @@ class GpuDiffuseProjector:
         self._excess.bind_to_storage_buffer(2)
         rows.bind_to_storage_buffer(3)
         barrier = moderngl.SHADER_STORAGE_BARRIER_BIT
-        first = self.programs.compute("kautz/project.glsl", {**defines, "PASS": 1})
+        first = self.programs.compute("prefilter/sh_project.glsl", {**defines, "PASS": 1})
         set_uniform(first, "u_face_size", size)
         first.run((_TILES + 63) // 64)
         if lights:
             self.ctx.memory_barrier(barrier)
-            second = self.programs.compute("kautz/project.glsl", {**defines, "PASS": 2})
+            second = self.programs.compute("prefilter/sh_project.glsl", {**defines, "PASS": 2})
             set_uniform(second, "u_face_size", size)
             set_uniform(second, "u_threshold", float(threshold))
             second.run((_TILES + 63) // 64)
         self.ctx.memory_barrier(barrier)
-        reduce = self.programs.compute("kautz/reduce.glsl", {**defines, "LIGHTS": lights})
+        reduce = self.programs.compute("prefilter/sh_reduce.glsl", {**defines, "LIGHTS": lights})
         reduce.run(1)
         self.ctx.memory_barrier(barrier | moderngl.UNIFORM_BARRIER_BIT)
 

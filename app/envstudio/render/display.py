@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from envstudio.methods.parameters import Parameter, ParameterValues
+from envstudio.core.parameters import Parameter, ParameterValues
 
 TONEMAPS = ("none", "reinhard", "aces")
 
@@ -25,6 +25,9 @@ DISPLAY_PARAMETERS = (
     ),
     Parameter("background", "bool", True, help="Draw the environment behind the objects."),
 )
+
+#: Their names: ``--param`` takes them for every method.
+DISPLAY_NAMES = tuple(p.name for p in DISPLAY_PARAMETERS)
 
 
 def display_values() -> ParameterValues:

@@ -19,14 +19,14 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.core.parameters import ParameterValues
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.timers import PassTimer
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method
-from envstudio.methods.context import FrameInputs, GpuScene
-from envstudio.methods.parameters import ParameterValues
 from envstudio.render.display import TONEMAPS, display_values
+from envstudio.render.gpu_scene import FrameInputs, GpuScene
+from envstudio.render.method import Method
 from envstudio.scene.camera import OrbitCamera
 
 

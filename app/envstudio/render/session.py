@@ -11,11 +11,15 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.core.parameters import parse_assignments
+from envstudio.errors import ParameterError
 from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.methods.base import Method, available_methods, method_class
-from envstudio.methods.context import GpuScene
+from envstudio.render.display import DISPLAY_NAMES
 from envstudio.render.frame import FrameRenderer, FrameStats
+from envstudio.render.gpu_scene import GpuScene
+from envstudio.render.method import Method
+from envstudio.render.registry import available_methods, method_class
 from envstudio.scene.graph import Scene
 
 
@@ -71,6 +75,26 @@ class RenderSession:
             method.values.update(material_values(self.scene), ignore_unknown=True)
             self._methods[name] = method
         return self._methods[name]
+
+    def apply(self, method: Method, assignments: list[str]) -> None:
+        """Apply ``name=value`` strings to the method's or the display's parameters.
+
+        Raises
+        ------
+        ParameterError
+            A name neither the method nor the display declares, or a bad value.
+        """
+        for name, value in parse_assignments(assignments).items():
+            if name in method.values:
+                method.values[name] = value
+            elif name in DISPLAY_NAMES:
+                self.renderer.display[name] = value
+            else:
+                own = ", ".join(p.name for p in method.values) or "none"
+                raise ParameterError(
+                    f"unknown parameter {name!r} for method {method.name} "
+                    f"(method: {own}; display: {', '.join(DISPLAY_NAMES)})"
+                )
 
     def method_names(self) -> list[str]:
         """Registered method names."""

@@ -17,10 +17,10 @@ import moderngl
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method
-from envstudio.methods.context import GpuScene
 from envstudio.render.display import TONEMAPS
 from envstudio.render.frame import FrameRenderer, FrameStats
+from envstudio.render.gpu_scene import GpuScene
+from envstudio.render.method import Method
 from envstudio.scene.camera import OrbitCamera
 
 

@@ -31,20 +31,21 @@ from moderngl_window import WindowConfig
 from moderngl_window.context.base import BaseWindow, KeyModifiers
 from moderngl_window.timers.clock import Timer
 
+from envstudio.core.parameters import ParameterValues
 from envstudio.errors import ParameterError, UserError
 from envstudio.gpu.programs import ShaderCompileError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.images import HDR_SUFFIXES
 from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
 from envstudio.io.scene_file import shipped_scenes
-from envstudio.methods.base import Method, available_methods, method_class
-from envstudio.methods.parameters import ParameterValues
-from envstudio.render.matching import match_glossiness
+from envstudio.io.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
+from envstudio.measure.matching import match_glossiness
+from envstudio.render.method import Method
+from envstudio.render.registry import available_methods, method_class
 from envstudio.render.session import RenderSession
 from envstudio.render.split_view import SplitView
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene
-from envstudio.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
 from envstudio.ui.camera_control import CameraControl
 from envstudio.ui.capture import (
     CaptureRequest,

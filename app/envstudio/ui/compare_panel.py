@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from imgui_bundle import imgui
 
 from envstudio.core.colormap import magma
-from envstudio.methods.base import Method
+from envstudio.render.method import Method
 from envstudio.render.split_view import SplitSettings
 
 OFF = "off"

@@ -22,9 +22,9 @@ from pathlib import Path
 
 from imgui_bundle import imgui, implot
 
+from envstudio.core.parameters import ParameterValues
 from envstudio.errors import UserError
-from envstudio.methods.base import Method
-from envstudio.methods.parameters import ParameterValues
+from envstudio.render.method import Method
 from envstudio.render.session import material_values
 from envstudio.scene.graph import Scene
 from envstudio.ui.capture import FORMATS

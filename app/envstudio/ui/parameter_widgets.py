@@ -12,6 +12,7 @@ declaration validates it::
     choice  combo of ``choices``
     path    a text field (applied on Enter) and an "Open..." button for a native
             file dialog offering the suffixes in ``choices``
+    color   color_edit3 (linear RGB; values past 1 for an unbounded maximum)
 
 The unit and help text form the tooltip. A number typed past its range
 (Ctrl+click on a slider) is clamped to it and the clamp is noted in the status line.
@@ -21,8 +22,8 @@ from __future__ import annotations
 
 from imgui_bundle import imgui
 
+from envstudio.core.parameters import Parameter, ParameterValues
 from envstudio.errors import UserError
-from envstudio.methods.parameters import Parameter, ParameterValues
 from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.status import StatusLine
 
@@ -98,6 +99,12 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> str | None:
         changed, value = imgui.checkbox(label, bool(current))
     elif param.kind == "path":
         changed, value = _path_widget(param, str(current))
+    elif param.kind == "color":
+        hdr = imgui.ColorEditFlags_.hdr if param.maximum is None or param.maximum > 1 else 0
+        changed, rgb = imgui.color_edit3(
+            label, list(current), flags=hdr | imgui.ColorEditFlags_.float
+        )
+        value = tuple(float(c) for c in rgb)
     else:
         index = param.choices.index(current)
         changed, index = imgui.combo(label, index, list(param.choices))

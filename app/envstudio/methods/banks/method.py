@@ -28,54 +28,15 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.banks.maps import GpuMapBuilder, MapSpec, build_cpu, map_texture, upload
-from envstudio.methods.banks.tangent_buffers import TangentBuffers
-from envstudio.methods.base import Method, register
-from envstudio.methods.context import FrameInputs
-from envstudio.methods.mirror import MirrorMethod, set_eq8_uniforms
-from envstudio.methods.parameters import Parameter
-from envstudio.scene.tangents import AXES, FIELDS, TangentField
+from envstudio.plugin import EQ8_PARAMETERS, FrameInputs, Method, Parameter, set_eq8_uniforms
+from envstudio.render.materials import BANKS_MATERIAL_PARAMETERS
+from envstudio.render.tangent_buffers import TangentBuffers
+from envstudio.scene.tangents import TangentField
 
 VIEWS = ("reflector", "slice")
 BUILDERS = ("gpu", "cpu")
 
-#: The parameters of the Banks material, shared with ``reference`` model=banks.
-MATERIAL_PARAMETERS = (
-    Parameter(
-        "sharpness",
-        "float",
-        0.9,
-        0.0,
-        0.9999,
-        "s",
-        "Banks sharpness s ∈ [0, 1) of seed 004 §5.3: the highlight cone's half-thickness "
-        "is acos(s).",
-    ),
-    Parameter(
-        "tangent_field",
-        "choice",
-        "axis",
-        choices=FIELDS,
-        help="Tangents: around the axis (brushed, turned), along it, radial from it, or the "
-        "mesh's UV u direction (falls back to axis without UVs).",
-    ),
-    Parameter(
-        "tangent_axis",
-        "choice",
-        "y",
-        choices=tuple(AXES),
-        help="Axis (or direction) of the tangent field, in mesh coordinates.",
-    ),
-    Parameter(
-        "normalize",
-        "bool",
-        True,
-        help="Divide the lobe by its integral at each ⟨v,t⟩ (a white environment reflects "
-        "white); off: the paper's 1/(1 − s)², many times brighter.",
-    ),
-)
 
-
-@register
 class BanksMethod(Method):
     """Banks-model anisotropic 3D environment map (seed 004 §5.3)."""
 
@@ -86,7 +47,7 @@ class BanksMethod(Method):
         "symmetry) and ∠(v,t); per-vertex or per-pixel coordinates; Schlick Fresnel."
     )
     parameters = (
-        *MATERIAL_PARAMETERS,
+        *BANKS_MATERIAL_PARAMETERS,
         Parameter(
             "per_pixel",
             "bool",
@@ -137,7 +98,7 @@ class BanksMethod(Method):
             "deg",
             "∠(v,t) of the slice shown by view=slice (seed 004 Figure 6: 44, 39, 35).",
         ),
-        *MirrorMethod.parameters,  # fresnel f_λ and k_d: the same eq. 8 as mirror's
+        *EQ8_PARAMETERS,  # fresnel f_λ and k_d: the same eq. 8 as mirror's
     )
 
     def __init__(self, ctx: moderngl.Context, programs):

@@ -1,3 +1,2 @@
-"""Method ``hwconv`` (seed 004 §5.2): radii (no GL), convolution (GPU passes), method."""
-
-from envstudio.methods.hwconv import method  # noqa: F401  (registers the method)
+"""Method ``hwconv`` (seed 004 §5.2): radii (no GL), convolution (GPU passes), method,
+accuracy and bench (seed 004's tables), figures (Figure 3), plugin."""

@@ -20,7 +20,7 @@ change the kernel weights, uniforms of one compiled program: no recompile.
 
 In ``envstudio compare``'s report (:meth:`HwConvMethod.report_extras`) the method
 adds its accuracy against the brute-force Phong prefilter at the compared N
-(render/hwconv_accuracy.py at a cheap setting: :data:`REPORT_DIRECTIONS`
+(methods/hwconv/accuracy.py at a cheap setting: :data:`REPORT_DIRECTIONS`
 directions, error image faces of :data:`REPORT_FACE` texels), a table and the
 error image.
 """
@@ -34,12 +34,9 @@ import moderngl
 from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method, ReportExtra, register
-from envstudio.methods.context import FrameInputs
 from envstudio.methods.hwconv.convolution import FaceMaps, ParaboloidConvolution
 from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, plan_filters
-from envstudio.methods.mirror import MirrorMethod
-from envstudio.methods.parameters import Parameter
+from envstudio.plugin import EQ8_PARAMETERS, FrameInputs, Method, Parameter, ReportExtra
 
 #: Choices of ``view``: the reflector, or one of the maps as the frame.
 VIEWS = ("reflector", "blended", "small", "large", "exact")
@@ -51,7 +48,6 @@ REPORT_DIRECTIONS = 2048
 REPORT_FACE = 128
 
 
-@register
 class HwConvMethod(Method):
     """Two-pass hardware Phong convolution of a dual-paraboloid map (seed 004 §5.2)."""
 
@@ -138,7 +134,7 @@ class HwConvMethod(Method):
             help="Show the reflector, or the blended map, S, L or the exact map as the frame "
             "(front | back).",
         ),
-        *MirrorMethod.parameters,  # fresnel f_λ and k_d: the same eq. 8 as mirror's
+        *EQ8_PARAMETERS,  # fresnel f_λ and k_d: the same eq. 8 as mirror's
     )
 
     def __init__(self, ctx: moderngl.Context, programs):
@@ -259,7 +255,7 @@ class HwConvMethod(Method):
         A scene with local objects gets a note instead (the brute force sees only
         the environment).
         """
-        from envstudio.render.hwconv_accuracy import MODES, run_accuracy, write_error_images
+        from envstudio.methods.hwconv.accuracy import MODES, run_accuracy, write_error_images
 
         title = "accuracy against the brute-force Phong prefilter"
         exponent = float(self.values["phong_exponent"])

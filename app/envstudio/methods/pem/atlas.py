@@ -2,7 +2,7 @@
 
 Every view's and part's maps of one EM model, all MIP levels, go into one
 RGBA32F 2D texture in a flat texel order that is the column order of the bake's
-rendering matrix (bake/pem/infer.py ``trilinear_matrix``): map m = v·P + p
+rendering matrix (methods/pem/bake/infer.py ``trilinear_matrix``): map m = v·P + p
 starts at m·T, T = Σ_k 6 n_k² (n_k = n >> k), level k at Σ_{j<k} 6 n_j², texel
 (face f, row i, column j) of level k at offset_k + f n_k² + i n_k + j. Flat index
 x lies at column x mod W, row x div W. All views stay resident (seed 003 §6

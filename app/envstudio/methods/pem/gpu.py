@@ -7,9 +7,9 @@ import time
 import moderngl
 import numpy as np
 
-from envstudio.bake.pem.pem_file import PemBake
 from envstudio.errors import InputFileError
 from envstudio.methods.pem.atlas import ATLAS_WIDTH, pack_atlas, pack_flags
+from envstudio.methods.pem.bake.pem_file import PemBake
 
 __all__ = ["MODELS", "TEXGENS", "PemTextures", "texgen_defines"]
 
@@ -34,7 +34,7 @@ class PemTextures:
     ctx
         The context.
     bake
-        A verified bake (:func:`envstudio.bake.pem.load_pem`).
+        A verified bake (:func:`envstudio.methods.pem.bake.load_pem`).
 
     Attributes
     ----------

@@ -20,17 +20,15 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from envstudio.bake.pem.pem_file import PemBake, load_pem
 from envstudio.core.cubemap import faces_to_cross
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method, ReportExtra, register
-from envstudio.methods.context import FrameInputs, GpuScene
-from envstudio.methods.parameters import Parameter
+from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, view_blend
 from envstudio.methods.pem.gpu import MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.verify import check_bake_for_scene
-from envstudio.methods.rsibr.figure import to_ldr, upright
+from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter, ReportExtra
+from envstudio.render.images import to_ldr, upright
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 
@@ -53,7 +51,6 @@ class _Loaded:
     models: list = field(default_factory=list)  # the reflectors' model matrices it was baked for
 
 
-@register
 class PemMethod(Method):
     """Layered PEM playback with view blending (seed 003 §4, "run-time")."""
 

@@ -4,7 +4,7 @@ Seed 003 Figures 6 and 7 show the layered PEM against the sphere-at-infinity
 PEM and a static EM at views the bake never sampled. :func:`measure` renders
 ``pem`` with each EM model at such views (midway between samples, and 10° and
 20° above the arc) and compares them with a ray trace at that exact view (the
-bake's own tracer, bake/pem/trace.py, whose composite is the ground truth of the
+bake's own tracer, methods/pem/bake/trace.py, whose composite is the ground truth of the
 playback), over the pixels the reflector covers fully: PSNR and FLIP of the
 displayed images (core/metrics.py, as ``compare``) and the linear PSNR of the
 bake's numbers (peak = the trace's maximum there); the pixels are those one part
@@ -22,11 +22,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.bake.pem.infer import psnr as linear_psnr
-from envstudio.bake.pem.trace import SceneTracer
 from envstudio.core.metrics import compare_images
+from envstudio.methods.pem.bake.infer import psnr as linear_psnr
+from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.gpu import MODELS
-from envstudio.methods.rsibr.figure import to_ldr
+from envstudio.render.images import to_ldr
 from envstudio.scene.camera import OrbitCamera
 
 __all__ = ["OffManifoldView", "ViewResult", "measure", "offmanifold_views", "wobble"]

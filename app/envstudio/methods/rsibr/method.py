@@ -31,18 +31,17 @@ import time
 import moderngl
 import numpy as np
 
-from envstudio.bake.rsibr import bake as rb
-from envstudio.bake.rsibr.brdfs import BRDFS, brdf
-from envstudio.bake.rsibr.gpu import DEFAULT_SAMPLES, GpuBaker
 from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import read_cube
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.base import Method, register
-from envstudio.methods.context import FrameInputs, StaticEnvironment
-from envstudio.methods.parameters import Parameter
-from envstudio.methods.rsibr.figure import figure4, to_ldr, upright
+from envstudio.methods.rsibr.bake import bake as rb
+from envstudio.methods.rsibr.bake.brdfs import BRDFS, brdf
+from envstudio.methods.rsibr.figures import figure4
 from envstudio.methods.rsibr.generator import MapGenerator
+from envstudio.methods.rsibr.gpu_bake import DEFAULT_SAMPLES, GpuBaker
+from envstudio.plugin import FrameInputs, Method, Parameter, StaticEnvironment
+from envstudio.render.images import to_ldr, upright
 
 __all__ = ["RsibrMethod"]
 
@@ -50,7 +49,6 @@ _SHADING = {"phong": 0, "lambertian": 1, "carpaint": 2}
 _BAKE_PARAMETERS = {p.name: p for b in BRDFS.values() for p in b.parameters}
 
 
-@register
 class RsibrMethod(Method):
     """Seed 002: 12 icosahedral radiance sphere maps warped and blended per frame."""
 

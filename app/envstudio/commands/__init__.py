@@ -1,0 +1,42 @@
+"""The subcommands, one module each; ``envstudio --help`` lists them in this order.
+
+Each module defines a :class:`~envstudio.render.hooks.Command` (the hook type a
+plugin's own subcommands use too). ``bake``, ``figure`` and ``bench`` take
+their kinds, names and tables from the plugins (:mod:`envstudio.render.registry`).
+"""
+
+from __future__ import annotations
+
+from envstudio.commands import (
+    bake,
+    bench,
+    compare,
+    doctor,
+    envmap,
+    figure,
+    fit_glossiness,
+    methods,
+    prefilter,
+    render,
+    sh,
+    view,
+)
+from envstudio.render.hooks import Command
+
+
+def builtin_commands() -> list[Command]:
+    """envmap-studio's own subcommands, in ``--help`` order."""
+    return [
+        doctor.COMMAND,
+        view.COMMAND,
+        render.COMMAND,
+        envmap.COMMAND,
+        methods.COMMAND,
+        bench.COMMAND,
+        prefilter.COMMAND,
+        compare.COMMAND,
+        fit_glossiness.COMMAND,
+        sh.COMMAND,
+        bake.command(),
+        figure.COMMAND,
+    ]

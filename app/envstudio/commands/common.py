@@ -1,0 +1,104 @@
+"""What several subcommands share: the scene and parameter options, the time limit,
+a session of the scene the options name, rendering until a method is finished."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from envstudio.errors import ParameterError
+
+
+def add_scene_options(parser: argparse.ArgumentParser) -> None:
+    """``--scene``, ``--env`` and ``--mesh``."""
+    parser.add_argument("--scene", help="shipped scene name (studio, room) or a TOML scene file")
+    parser.add_argument("--env", help="lat-long environment (.exr or .hdr), replaces the scene's")
+    parser.add_argument(
+        "--mesh", help="mesh file (OBJ, PLY, STL, OFF, GLB), replaces the reflector"
+    )
+
+
+def add_param_option(parser: argparse.ArgumentParser) -> None:
+    """``--param NAME=VALUE`` (repeatable)."""
+    parser.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="method or display parameter (repeatable), e.g. lod_bias=2.3",
+    )
+
+
+def add_time_limit_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--time-limit SECONDS`` for a progressive ground truth."""
+    parser.add_argument(
+        "--time-limit",
+        metavar="SECONDS",
+        help=f"{what} this many seconds and report the noise reached (a positive number)",
+    )
+
+
+def add_camera_option(parser: argparse.ArgumentParser) -> None:
+    """``--camera AZIMUTH,ELEVATION,DISTANCE``."""
+    parser.add_argument("--camera", help="AZIMUTH,ELEVATION,DISTANCE in degrees and scene units")
+
+
+def parse_time_limit(text: str | None) -> float | None:
+    """``--time-limit SECONDS`` as a float (None when not given).
+
+    Raises
+    ------
+    ParameterError
+        Unless a finite number > 0 and at most the ground truth's ``time_limit`` maximum.
+    """
+    if text is None:
+        return None
+    from envstudio.measure.ground_truth import MAX_TIME_LIMIT_S
+
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0 < seconds <= MAX_TIME_LIMIT_S:
+        raise ParameterError(
+            f"--time-limit {text}: expected a positive number of seconds "
+            f"(at most {MAX_TIME_LIMIT_S:g})"
+        )
+    return seconds
+
+
+def session_from_args(args: argparse.Namespace, scene=None):
+    """A :class:`~envstudio.render.session.RenderSession` of ``scene`` (default: the scene
+    options'), with ``--camera`` applied when the command has it."""
+    from envstudio.io.scene_setup import build_scene, parse_camera
+    from envstudio.render.session import RenderSession
+
+    camera = parse_camera(args.camera) if getattr(args, "camera", None) else None
+    session = RenderSession(scene or build_scene(args.scene, args.env, args.mesh))
+    if camera:
+        session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
+    return session
+
+
+def render_until_finished(session, method, size: tuple[int, int]):
+    """Render frames until the method is finished (one for one-shot methods), with progress."""
+    from tqdm import tqdm
+
+    stats = session.render_offscreen(method, size)
+    if method.finished():
+        return stats
+    with tqdm(
+        desc=method.name,
+        unit="frame",
+        file=sys.stderr,
+        disable=not sys.stderr.isatty(),
+        bar_format="{desc}: {n} frames {elapsed} {postfix}",
+    ) as bar:
+        while not method.finished():
+            stats = session.render_offscreen(method, size)
+            bar.update(1)
+            bar.set_postfix_str(method.status_line())
+    if method.status_line():
+        print(f"{method.name}: {method.status_line()}", file=sys.stderr)
+    return stats

@@ -1,0 +1,643 @@
+"""``envstudio compare``: methods against the reference at matched parameters.
+
+Steps, in one :class:`RenderSession` (one camera, one size, one display setting):
+
+1. Each method renders the same frame (until :meth:`Method.finished`); its
+   linear HDR frame and its display image are kept.
+2. The ground truth (the plugin declared ``ground_truth``: methods/reference/)
+   accumulates until the stopping rule holds (measure/stopping.py): by default
+   until its noise is under a tenth of every method's error against it (judged
+   at its checkpoints), strictly
+   until its successive-half change is below ``tolerance``; under either rule
+   it also stops on its sample budget (``max_samples``) or time limit
+   (``time_limit``). A progress line shows the noise, each method's error and
+   the time left. Its coverage is the reflector mask; an empty mask (the
+   camera sees no reflector) is an error. With the cache on (the CLI's
+   default), the accumulation is saved as it goes and a later run with the
+   same inputs resumes it (measure/ground_truth_cache.py).
+3. Every method is measured against the reference with core/metrics.py
+   (PSNR, SSIM, FLIP on the display images over the mask).
+4. Each method is timed by the bench code path (measure/bench.py: wall clock
+   with ``ctx.finish()`` at both ends, median of ``frames`` frames after
+   ``warmup``); the reference's time per frame is the median of its own
+   accumulation frames, measured the same way.
+
+Parameter matching
+    Every method starts from the scene's material (RenderSession). ``--param
+    name=value`` goes to every method of the comparison that declares ``name``,
+    the reference included, and to the display settings; the others ignore it.
+    A name that no method and no display setting declares is an error. A method
+    that blurs a mip chain by a LOD bias (declares ``lod_bias`` but not
+    ``phong_exponent``) gets the b that looks like the reference's Phong
+    exponent N on this session's cube (prefilter/glossiness.py), unless
+    ``--param lod_bias=…`` sets it.
+
+Reliability
+    A method's metrics are reliable when the reference converged or its noise
+    is under :data:`NOISE_SHARE` of the method's median relative error
+    (:func:`_judge`). A reference stopped by its budget or time limit before
+    that still carries Monte Carlo noise that is part of the metrics: they are
+    marked unreliable and the reason is given
+    (:attr:`ReferenceRun.unreliable_reason`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+from tqdm import tqdm
+
+from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
+from envstudio.core.parameters import parse_assignments
+from envstudio.errors import ParameterError
+from envstudio.gpu.context import describe
+from envstudio.measure import ground_truth_cache
+from envstudio.measure.bench import run_bench
+from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
+from envstudio.measure.matching import match_glossiness
+from envstudio.measure.stopping import (
+    NOISE_RULE,
+    NOISE_SHARE,
+    TOLERANCE_RULE,
+    ReferenceJudge,
+    choose_rule,
+    duration,
+    median_error,
+)
+from envstudio.render.display import DISPLAY_PARAMETERS
+from envstudio.render.method import Method, ReportExtra
+from envstudio.render.registry import ground_truth_class, method_class
+from envstudio.render.session import RenderSession
+
+STOPPED_BY = {
+    "reliable": "every method reliable",
+    "converged": "converged",
+    "max_samples": "sample budget spent",
+    "time_limit": "time limit reached",
+}
+"""What ends the reference's accumulation, as :attr:`ReferenceRun.stopped_by` names it."""
+MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
+"""Parameters listed as "matched" in the report when a method declares them."""
+
+
+@dataclass(frozen=True)
+class ParameterPlan:
+    """Validated ``--param`` values, per method and for the display.
+
+    Attributes
+    ----------
+    methods : dict
+        Method name → {parameter name → value} for the names that method declares.
+    display : dict
+        Display setting → value.
+    """
+
+    methods: dict[str, dict[str, object]]
+    display: dict[str, object]
+
+
+@dataclass
+class ReferenceRun:
+    """The converged (or budget-limited) reference.
+
+    Attributes
+    ----------
+    parameters : dict
+        Its parameter values.
+    status : ConvergenceStatus
+        Samples per pixel, last successive-half change, converged.
+    frames_ms : list of float
+        Wall time of each accumulation frame, ms.
+    total_s : float
+        Wall time from the first frame to the last, s.
+    relative_standard_error : float
+        Median over the mask of the luminance standard error over the luminance
+        of the estimate (channel errors added: an upper bound).
+    resumed_samples : int
+        Samples per pixel taken over from a saved accumulation (0 when it
+        started afresh; ``frames_ms`` and ``total_s`` count this run only).
+    hdr : (h, w, 3) float32
+        Linear radiance of the frame.
+    display : (h, w, 3) float32
+        The frame as displayed, in [0, 1].
+    stopping_rule : str
+        ``noise`` (the default) or ``tolerance`` (strict), measure/stopping.py.
+    stopped_by : str
+        A key of :data:`STOPPED_BY`: what ended the accumulation.
+    wall_s : float
+        Wall time of this run's accumulation, s (what ``time_limit`` counts:
+        ``total_s`` plus the time between frames).
+    """
+
+    parameters: dict[str, object]
+    status: ConvergenceStatus
+    frames_ms: list[float]
+    total_s: float
+    relative_standard_error: float
+    resumed_samples: int
+    hdr: npt.NDArray[np.float32]
+    display: npt.NDArray[np.float32]
+    stopping_rule: str = TOLERANCE_RULE
+    stopped_by: str = "converged"
+    wall_s: float = 0.0
+
+    @property
+    def converged(self) -> bool:
+        """The successive-half change fell below the tolerance within the budget."""
+        return self.status.converged
+
+    @property
+    def unreliable_reason(self) -> str | None:
+        """Why marked metrics cannot be trusted, or None when the reference converged."""
+        if self.converged:
+            return None
+        # batches of one Sobol sequence are negatively correlated: their spread overstates
+        bound = (
+            ", an upper bound under sequence=sobol"
+            if self.parameters.get("sequence") == "sobol"
+            else ""
+        )
+        return (
+            f"{self._stop_text()} and its median relative standard error "
+            f"({100 * self.relative_standard_error:.3g} %{bound}) is not below "
+            f"{NOISE_SHARE:g} of the marked methods' median relative error, so its Monte Carlo "
+            f"noise is part of their metrics ({self._advice()})"
+        )
+
+    def _stop_text(self) -> str:
+        """How the reference stopped short, with the half-change under the tolerance rule."""
+        if self.stopped_by == "time_limit":
+            text = (
+                f"the reference reached its time limit of {float(self.parameters['time_limit']):g}"
+                " s before it converged"
+            )
+        else:
+            text = (
+                f"the reference did not converge within max_samples="
+                f"{self.parameters['max_samples']} spp"
+            )
+        if self.stopping_rule != TOLERANCE_RULE:
+            return text
+        change = self.status.rms_change
+        measured = (
+            "no convergence check yet (fewer than 2 frames)"
+            if change is None
+            else f"half-change {100 * change:.3g} % > tolerance "
+            f"{100 * float(self.parameters['tolerance']):.3g} %"
+        )
+        return f"{text} ({measured})"
+
+    def _advice(self) -> str:
+        """What to raise to get reliable numbers."""
+        raised = "--time-limit" if self.stopped_by == "time_limit" else "max_samples"
+        return (
+            f"raise {raised} or tolerance"
+            if self.stopping_rule == TOLERANCE_RULE
+            else (f"raise {raised}")
+        )
+
+
+@dataclass
+class MethodResult:
+    """One method's frame and how it compares.
+
+    Attributes
+    ----------
+    name : str
+        Method name.
+    parameters : dict
+        Its parameter values as rendered.
+    matched : dict
+        The material parameters it declares (:data:`MATCHED_NAMES`) and their values.
+    glossiness : str or None
+        How ``lod_bias`` was matched to the reference's N, when it was.
+    metrics : ImageMetrics
+        Against the reference, over the mask.
+    relative_error : (h, w) float32
+        Per-pixel relative luminance error of the linear frames.
+    frame_ms : dict
+        ``median_ms`` and ``p95_ms`` of the time per frame.
+    timing : str
+        How ``frame_ms`` was measured.
+    hdr : (h, w, 3) float32
+        Linear radiance of the frame.
+    display : (h, w, 3) float32
+        The frame as displayed, in [0, 1].
+    """
+
+    name: str
+    parameters: dict[str, object]
+    matched: dict[str, object]
+    glossiness: str | None
+    metrics: ImageMetrics
+    relative_error: npt.NDArray[np.float32]
+    frame_ms: dict[str, float]
+    timing: str
+    hdr: npt.NDArray[np.float32]
+    display: npt.NDArray[np.float32]
+    median_relative_error: float = float("nan")
+    reliable: bool = True
+
+
+@dataclass
+class Comparison:
+    """Everything ``envstudio compare`` reports.
+
+    Attributes
+    ----------
+    scene : str
+        Scene name.
+    size : (int, int)
+        Width, height in pixels.
+    camera : (float, float, float)
+        Azimuth, elevation (degrees), distance (scene units).
+    display : dict
+        Display settings the display images were made with.
+    device : str
+        GL renderer and version.
+    mask : (h, w) bool
+        The reflector pixels (the reference's coverage).
+    reference : ReferenceRun
+    results : list of MethodResult
+        In the order asked for.
+    extras : dict
+        Method name → the sections it adds to the report (:meth:`Method.report_extras`;
+        only methods that add some).
+    """
+
+    scene: str
+    size: tuple[int, int]
+    camera: tuple[float, float, float]
+    display: dict[str, object]
+    device: str
+    mask: npt.NDArray[np.bool_]
+    reference: ReferenceRun
+    results: list[MethodResult]
+    extras: dict[str, list[ReportExtra]] = field(default_factory=dict)
+
+    @property
+    def reliable(self) -> bool:
+        """Whether every method's metrics can be trusted (:func:`reliable_against`)."""
+        return all(result.reliable for result in self.results)
+
+
+def method_classes(names: Sequence[str]) -> list[type[Method]]:
+    """The reference's class and those of ``names`` (registered), each once, reference first.
+
+    Raises
+    ------
+    ParameterError
+        If a name is not a registered method.
+    """
+    truth = ground_truth_class()
+    classes: dict[str, type[Method]] = {truth.name: truth}
+    for name in names:
+        classes.setdefault(name, method_class(name))
+    return list(classes.values())
+
+
+def plan_parameters(classes: Sequence[type[Method]], assignments: Sequence[str]) -> ParameterPlan:
+    """Validate ``--param name=value`` strings for a comparison of ``classes``.
+
+    Parameters
+    ----------
+    classes
+        The method classes compared, the reference's included.
+    assignments
+        ``name=value`` strings.
+
+    Raises
+    ------
+    ParameterError
+        A malformed assignment, a value out of range, or a name that neither a
+        method of ``classes`` nor the display declares.
+    """
+    display_decl = {p.name: p for p in DISPLAY_PARAMETERS}
+    plan = ParameterPlan({cls.name: {} for cls in classes}, {})
+    for name, value in parse_assignments(assignments).items():
+        if name in display_decl:
+            plan.display[name] = display_decl[name].validate(value)
+            continue
+        takers = [(cls, p) for cls in classes for p in cls.parameters if p.name == name]
+        if not takers:
+            raise ParameterError(
+                f"--param {name}: no method of this comparison declares it "
+                f"({', '.join(cls.name for cls in classes)}; "
+                f"display: {', '.join(display_decl)})"
+            )
+        for cls, declared in takers:
+            plan.methods[cls.name][name] = declared.validate(value)
+    return plan
+
+
+def run_comparison(
+    session: RenderSession,
+    names: Sequence[str],
+    size: tuple[int, int],
+    plan: ParameterPlan,
+    frames: int = 20,
+    warmup: int = 3,
+    progress: bool = False,
+    cache: bool = False,
+    strict: bool = False,
+    time_limit_s: float | None = None,
+    extras_dir: Path | None = None,
+) -> Comparison:
+    """Render ``names`` and the reference at the session's camera and compare them.
+
+    Parameters
+    ----------
+    session
+        The session, camera already placed; its methods get ``plan``'s values.
+    names
+        Registered method names (``reference`` compares the reference with itself).
+    size
+        Width, height in pixels, each ≥ core.metrics.MIN_SIZE.
+    plan
+        From :func:`plan_parameters` for the reference and ``names``.
+    frames, warmup
+        Timed and untimed frames per method.
+    progress
+        Show a progress line on stderr while the reference accumulates.
+    cache
+        Resume the reference from, and save it to, measure/ground_truth_cache.py.
+    strict
+        Stop the reference by its tolerance, not by the methods' errors
+        (measure/stopping.py; an explicit ``tolerance`` in ``plan`` does too).
+    time_limit_s
+        The reference's time limit in seconds (its ``time_limit``; None keeps ``plan``'s).
+    extras_dir
+        The report's folder (made if missing): each compared method's
+        :meth:`Method.report_extras` runs after the measurements and writes its
+        images there. None: no extras.
+
+    Raises
+    ------
+    ParameterError
+        If the camera sees no reflector (empty mask).
+    """
+    for name, value in plan.display.items():
+        session.renderer.display[name] = value
+    truth = ground_truth_class().name
+    reference = session.method(truth)
+    reference.values.update(plan.methods[truth])
+    if time_limit_s is not None:
+        reference.values["time_limit"] = time_limit_s
+    rendered = {
+        name: _render_method(session, name, plan.methods[name], reference, size)
+        for name in names
+        if name != truth
+    }
+    rule = choose_rule(list(names), plan.methods[truth], strict)
+    judge = ReferenceJudge(rule, {name: frame[2] for name, frame in rendered.items()})
+    ref_run, mask = _converge(session, reference, size, progress, cache, judge)
+    frames_of = {
+        name: rendered.get(name, (reference, None, ref_run.hdr, ref_run.display)) for name in names
+    }
+    timings = _time_methods(session, list(rendered), size, frames, warmup)
+    timings[truth] = (
+        _summary(ref_run.frames_ms),
+        "median of its accumulation frames",
+    )
+    results = [
+        _judge(
+            MethodResult(
+                name=name,
+                parameters=method.values.as_dict(),
+                matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
+                glossiness=glossiness,
+                metrics=compare_images(display, ref_run.display, mask),
+                relative_error=relative_error(hdr, ref_run.hdr),
+                frame_ms=timings[name][0],
+                timing=timings[name][1],
+                hdr=hdr,
+                display=display,
+            ),
+            ref_run,
+            mask,
+            truth,
+        )
+        for name, (method, glossiness, hdr, display) in frames_of.items()
+    ]
+    extras = _report_extras(session, list(rendered), extras_dir)
+    camera = session.camera
+    return Comparison(
+        scene=session.scene.name,
+        size=tuple(size),
+        camera=(camera.azimuth, camera.elevation, camera.distance),
+        display=session.renderer.display.as_dict(),
+        device=describe(session.ctx),
+        mask=mask,
+        reference=ref_run,
+        results=results,
+        extras=extras,
+    )
+
+
+def _report_extras(
+    session: RenderSession, names: list[str], out_dir: Path | None
+) -> dict[str, list[ReportExtra]]:
+    """Method name → its report sections (those that add some), images written to ``out_dir``."""
+    if out_dir is None:
+        return {}
+    out_dir = Path(out_dir)
+    out_dir.mkdir(exist_ok=True)
+    extras = {name: session.method(name).report_extras(session, out_dir) for name in names}
+    return {name: sections for name, sections in extras.items() if sections}
+
+
+def _render_method(
+    session: RenderSession,
+    name: str,
+    values: dict[str, object],
+    reference: GroundTruth,
+    size: tuple[int, int],
+) -> tuple[Method, str | None, npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+    """Render method ``name`` with ``values`` until finished, glossiness matched to ``reference``.
+
+    Returns
+    -------
+    tuple
+        The method, how its ``lod_bias`` was matched (or None), its linear HDR
+        frame and its display image.
+    """
+    method = session.method(name)
+    method.values.update(values)
+    glossiness = None
+    if "lod_bias" not in values:
+        glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
+    session.render_offscreen(method, size)
+    while not method.finished():
+        session.render_offscreen(method, size)
+    return method, glossiness, session.read_hdr(), _display_image(session, size)
+
+
+def _judge(
+    result: MethodResult, reference: ReferenceRun, mask: npt.NDArray[np.bool_], truth: str
+) -> MethodResult:
+    """Set the method's median relative error and whether its metrics can be trusted.
+
+    Trusted when the reference converged, or when the reference's own noise
+    (its median relative standard error) is below :data:`NOISE_SHARE` of the
+    method's median relative error over the mask: the measured difference is
+    then the method's, not the reference's noise. The reference compared with
+    itself is exact. The same test as the noise rule's (measure/stopping.py),
+    on the same numbers when the reference stopped by it.
+    """
+    result.median_relative_error = median_error(result.hdr, reference.hdr, mask)
+    result.reliable = (
+        reference.converged
+        or result.name == truth
+        or reference.relative_standard_error < NOISE_SHARE * result.median_relative_error
+    )
+    return result
+
+
+def _converge(
+    session: RenderSession,
+    reference: GroundTruth,
+    size: tuple[int, int],
+    progress: bool,
+    cache: bool,
+    judge: ReferenceJudge,
+) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
+    """Accumulate until ``judge``'s rule or the reference stops it; the run and the mask.
+
+    Resumed and saved with ``cache``. Raises on an empty mask.
+    """
+    frames_ms: list[float] = []
+    checkpoint = ground_truth_cache.Checkpoint(session, reference, size) if cache else None
+    with (
+        tqdm(
+            desc="reference",
+            unit="frame",
+            file=sys.stderr,
+            disable=not progress,
+            bar_format="{desc}: {elapsed}{postfix}",
+        ) as bar,
+        checkpoint.saved_on_interrupt() if checkpoint else contextlib.nullcontext(),
+    ):
+        frames_ms.append(_timed_frame(session, reference, size))
+        mask = _reflector_mask(session, reference)
+        while True:
+            if judge.due(reference.status.batches):
+                judge.judge(reference, session.read_hdr(), mask)
+            if progress:
+                bar.set_postfix_str(_progress_line(reference, judge), refresh=False)
+                bar.update()
+            if reference.finished() or judge.satisfied():
+                break
+            frames_ms.append(_timed_frame(session, reference, size))
+            if checkpoint:
+                checkpoint.save_if_due()
+    wall_s = reference.status.run_elapsed()
+    resumed = 0
+    if checkpoint:
+        checkpoint.save()
+        resumed = checkpoint.resumed_samples
+    if resumed:
+        print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
+    stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
+    noise = reference.relative_standard_error()
+    print(f"reference: {_stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
+    run = ReferenceRun(
+        parameters=reference.values.as_dict(),
+        status=replace(reference.status),
+        frames_ms=frames_ms,
+        total_s=sum(frames_ms) / 1e3,
+        relative_standard_error=noise,
+        resumed_samples=resumed,
+        hdr=session.read_hdr(),
+        display=_display_image(session, size),
+        stopping_rule=judge.rule,
+        stopped_by=stopped_by,
+        wall_s=wall_s,
+    )
+    return run, mask
+
+
+def _reflector_mask(session: RenderSession, reference: GroundTruth) -> npt.NDArray[np.bool_]:
+    """The reference's coverage after its first frame.
+
+    Raises
+    ------
+    ParameterError
+        If it is empty: the camera sees no reflector.
+    """
+    mask = reference.coverage()
+    if not mask.any():
+        camera = session.camera
+        raise ParameterError(
+            f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
+            f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
+        )
+    return mask
+
+
+def _stop_line(reference: GroundTruth, noise: float, wall_s: float, stopped_by: str) -> str:
+    """Where the reference stopped: samples, time, noise, half-change, and why."""
+    status = reference.status
+    change = "—" if status.rms_change is None else f"{100 * status.rms_change:.3g} %"
+    state = "converged" if status.converged else "NOT converged"
+    noise_text = f"{100 * noise:.3g} %" if np.isfinite(noise) else "—"
+    return (
+        f"{status.samples} spp in {wall_s:.1f} s, noise {noise_text}, half-change {change} "
+        f"({state}); stopped: {STOPPED_BY[stopped_by]}"
+    )
+
+
+def _progress_line(reference: GroundTruth, judge: ReferenceJudge) -> str:
+    """The reference's status and, once judged, the noise, every method's error and time left."""
+    line = judge.progress_line()
+    if judge.rule != NOISE_RULE or not line:
+        return f"{reference.status_line()}; {line}" if line else reference.status_line()
+    limit = float(reference.values["time_limit"])
+    if limit > 0:
+        line += f"; time limit in {duration(limit - reference.status.run_elapsed())}"
+    return f"{reference.status.samples} spp, {line}"
+
+
+def _time_methods(
+    session: RenderSession, names: list[str], size: tuple[int, int], frames: int, warmup: int
+) -> dict[str, tuple[dict[str, float], str]]:
+    """Method name → (median/p95 ms per frame, how it was measured), by the bench code path."""
+    if not names:
+        return {}
+    report = run_bench(session, names, size, frames, warmup, progress=False)
+    how = f"bench: median of {frames} frames after {warmup} warm-up"
+    return {name: (report["methods"][name]["frame"], how) for name in names}
+
+
+def _timed_frame(session: RenderSession, method: Method, size: tuple[int, int]) -> float:
+    """Render one frame; its wall time in ms with ``finish()`` at both ends (as bench)."""
+    session.ctx.finish()
+    start = time.perf_counter()
+    session.render_offscreen(method, size)
+    session.ctx.finish()
+    return (time.perf_counter() - start) * 1e3
+
+
+def _summary(samples: list[float]) -> dict[str, float]:
+    values = np.asarray(samples, dtype=np.float64)
+    return {"median_ms": float(np.median(values)), "p95_ms": float(np.percentile(values, 95))}
+
+
+def _display_image(session: RenderSession, size: tuple[int, int]) -> npt.NDArray[np.float32]:
+    """(h, w, 3) float32 of the last frame through the display shader, unquantised, in [0, 1]."""
+    texture = session.ctx.texture(size, 4, dtype="f4")
+    target = session.ctx.framebuffer([texture])
+    try:
+        session.renderer.present(target, (0, 0, *size))
+        data = np.frombuffer(target.read(components=3, dtype="f4"), dtype=np.float32)
+    finally:
+        target.release()
+        texture.release()
+    w, h = size
+    return np.clip(data.reshape(h, w, 3)[::-1], 0.0, 1.0)

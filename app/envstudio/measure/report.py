@@ -1,0 +1,417 @@
+"""The files of ``envstudio compare``: images, heat maps, a table (Markdown, JSON) and a page.
+
+Written into one folder, every file atomically::
+
+    reference.exr  reference.png         the reference frame: linear / as displayed
+    <method>.exr   <method>.png          each method's frame (not repeated for ``reference``)
+    <method>.flip.png                    LDR-FLIP error, magma over [0, 1]
+    <method>.relerr.png                  relative luminance error of the linear frames,
+                                         magma over [0, HEAT_SCALE] (as the viewer's heat map)
+    compare.md   compare.json            the table
+    index.html                           the images side by side with the table (relative links)
+
+A method may add sections (methods.base.ReportExtra, from Method.report_extras,
+e.g. hwconv's accuracy against the brute-force prefilter): each is a heading, a
+sentence, a small table and images it wrote into the folder, rendered after the
+table in compare.md and index.html and given under the method's ``extras`` in the
+JSON (only for methods that add some).
+
+Heat maps colour only the reflector's pixels; the rest shows the reference
+dimmed to grey. In the JSON, PSNR of identical images is the string ``"inf"``
+(JSON has no infinity) and numbers are plain floats; ``reliable`` is false and
+``unreliable_reason`` says why (null when every method is reliable). The
+reference's ``stopping_rule`` (``noise``: its noise under a tenth of every
+method's error, the default; ``tolerance``: the successive-half change, strict),
+``stopped_by`` (``reliable``, ``converged``, ``max_samples``, ``time_limit``) and
+``relative_standard_error`` (the noise reached) are stated in the JSON and on the
+table's ``reference:`` line. The Markdown table is what the command prints;
+unreliable metrics carry a dagger (†) and the reason follows the table.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core.colormap import MAGMA_STOPS, magma
+from envstudio.core.env_sampling import LUMINANCE
+from envstudio.io.atomic import check_output_path, write_text_atomic
+from envstudio.io.images import write_image
+from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult
+from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
+from envstudio.render.method import ReportExtra
+from envstudio.render.split_view import SplitSettings
+
+HEAT_SCALE = SplitSettings().heat_scale
+"""Relative error at the top of the colour scale of ``*.relerr.png`` (the viewer's default)."""
+CONTEXT_BRIGHTNESS = 0.35
+"""Brightness of the grey reference shown around the reflector in heat maps."""
+UNRELIABLE = "†"
+"""Mark of a metric that cannot be trusted."""
+
+METRIC_NOTES = {
+    "domain": "display images (exposure, tone map, sRGB encoding; float, clipped to [0, 1]) "
+    "over the reflector pixels (the reference's coverage)",
+    "psnr_db": "10 log10(1 / MSE), peak 1; inf when identical",
+    "ssim": "scikit-image, Gaussian window sigma 1.5, population covariance, "
+    "mean of the SSIM map over the mask",
+    "flip": "LDR-FLIP (flip-evaluator, 67 pixels per degree), mean over the mask",
+}
+
+
+def write_report(comparison: Comparison, folder: str | os.PathLike) -> list[Path]:
+    """Write every file of the comparison into ``folder`` (made if missing, parent must exist).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    folder = check_output_path(folder)
+    folder.mkdir(exist_ok=True)
+    reference = comparison.reference
+    written = [
+        write_image(folder / "reference.exr", reference.hdr),
+        write_image(folder / "reference.png", reference.display),
+    ]
+    for result in comparison.results:
+        files = _files(result.name)
+        if result.name != "reference":
+            written.append(write_image(folder / files["exr"], result.hdr))
+            written.append(write_image(folder / files["png"], result.display))
+        context = CONTEXT_BRIGHTNESS * (reference.display @ LUMINANCE)
+        written.append(
+            write_image(
+                folder / files["flip"],
+                heat_map(result.metrics.flip_map, comparison.mask, context),
+            )
+        )
+        written.append(
+            write_image(
+                folder / files["relerr"],
+                heat_map(result.relative_error / HEAT_SCALE, comparison.mask, context),
+            )
+        )
+    for name, text in (
+        ("compare.md", format_table(comparison) + "\n"),
+        ("compare.json", json.dumps(to_json(comparison), indent=2, allow_nan=False) + "\n"),
+        ("index.html", to_html(comparison)),
+    ):
+        write_text_atomic(folder / name, text)
+        written.append(folder / name)
+    return written
+
+
+def heat_map(
+    values: npt.ArrayLike, mask: npt.ArrayLike, context: npt.ArrayLike
+) -> npt.NDArray[np.float64]:
+    """Colour ``values`` in [0, 1] with magma inside ``mask``, grey ``context`` outside.
+
+    Parameters
+    ----------
+    values
+        (h, w) float, clamped to [0, 1].
+    mask
+        (h, w) bool.
+    context
+        (h, w) float grey level in [0, 1] shown outside the mask.
+
+    Returns
+    -------
+    (h, w, 3) float64
+        Display RGB in [0, 1].
+    """
+    grey = np.repeat(np.asarray(context, dtype=np.float64)[..., None], 3, axis=-1)
+    return np.where(np.asarray(mask, dtype=bool)[..., None], magma(values), grey)
+
+
+def format_table(comparison: Comparison) -> str:
+    """The comparison as Markdown: a header, the table, the reason for any dagger, the notes."""
+    w, h = comparison.size
+    az, el, dist = comparison.camera
+    display = comparison.display
+    ref = comparison.reference
+    lines = [
+        f"# envstudio compare: {comparison.scene}, {w}x{h}",
+        "",
+        f"camera azimuth {az:g}°, elevation {el:g}°, distance {dist:g}; display exposure "
+        f"{display['exposure']:g} EV, tone map {display['tonemap']}; "
+        f"{int(comparison.mask.sum())} reflector pixels; {comparison.device}",
+        "",
+        f"reference: {_reference_line(comparison)}",
+        "",
+        "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | matched parameters |",
+        "|:--|--:|--:|--:|--:|:--|:--|",
+    ]
+    for result in comparison.results:
+        m = result.metrics
+        mark = "" if result.reliable else UNRELIABLE
+        lines.append(
+            f"| {result.name} | {_psnr_text(m.psnr_db)}{mark} | {m.ssim:.4f}{mark} | "
+            f"{m.flip:.4f}{mark} | {result.frame_ms['median_ms']:.2f} | "
+            f"{'yes' if result.reliable else 'no'} | {_matched_text(result)} |"
+        )
+    lines.append("")
+    if not comparison.reliable:
+        lines += [f"{UNRELIABLE} unreliable: {ref.unreliable_reason}.", ""]
+    lines += [
+        f"Metrics on the {METRIC_NOTES['domain']}. PSNR: {METRIC_NOTES['psnr_db']}; SSIM: "
+        f"{METRIC_NOTES['ssim']}; FLIP: {METRIC_NOTES['flip']}.",
+        "ms/frame: wall clock with a GL finish at both ends; "
+        + "; ".join(sorted({f"{r.name}: {r.timing}" for r in comparison.results})),
+    ]
+    for name, sections in comparison.extras.items():
+        for extra in sections:
+            lines += ["", *_extra_markdown(name, extra)]
+    return "\n".join(lines)
+
+
+def _extra_markdown(name: str, extra: ReportExtra) -> list[str]:
+    """A method's report section as Markdown lines: heading, text, table, image links."""
+    lines = [f"## {name}: {extra.title}", "", extra.text]
+    if extra.columns:
+        lines += [
+            "",
+            f"| {' | '.join(extra.columns)} |",
+            "|:--|" + "--:|" * (len(extra.columns) - 1),
+            *(f"| {' | '.join(row)} |" for row in extra.rows),
+        ]
+    for file, caption in extra.images:
+        lines += ["", f"![{caption}]({file})"]
+    return lines
+
+
+def to_json(comparison: Comparison) -> dict:
+    """The comparison as a JSON-ready dict (module docstring)."""
+    ref = comparison.reference
+    az, el, dist = comparison.camera
+    return {
+        "scene": comparison.scene,
+        "size": list(comparison.size),
+        "camera": {"azimuth": az, "elevation": el, "distance": dist},
+        "display": comparison.display,
+        "device": comparison.device,
+        "mask_pixels": int(comparison.mask.sum()),
+        "reliable": comparison.reliable,
+        "unreliable_reason": None if comparison.reliable else ref.unreliable_reason,
+        "metrics": METRIC_NOTES,
+        "reference": {
+            "parameters": ref.parameters,
+            "samples": ref.status.samples,
+            "batches": ref.status.batches,
+            "rms_change": ref.status.rms_change,
+            "converged": ref.status.converged,
+            "stopping_rule": ref.stopping_rule,
+            "stopped_by": ref.stopped_by,
+            "frames": len(ref.frames_ms),
+            "total_s": ref.total_s,
+            "wall_s": ref.wall_s,
+            "relative_standard_error": _number(ref.relative_standard_error),
+            "resumed_samples": ref.resumed_samples,
+            "files": {"exr": "reference.exr", "png": "reference.png"},
+        },
+        "methods": {
+            r.name: {
+                "parameters": r.parameters,
+                "matched": r.matched,
+                "glossiness": r.glossiness,
+                "psnr_db": _number(r.metrics.psnr_db),
+                "ssim": r.metrics.ssim,
+                "flip": r.metrics.flip,
+                "reliable": r.reliable,
+                "median_relative_error": _number(r.median_relative_error),
+                "frame_ms": r.frame_ms,
+                "timing": r.timing,
+                "files": _files(r.name),
+                **(
+                    {"extras": [e.to_json() for e in comparison.extras[r.name]]}
+                    if r.name in comparison.extras
+                    else {}
+                ),
+            }
+            for r in comparison.results
+        },
+    }
+
+
+def to_html(comparison: Comparison) -> str:
+    """A self-contained page: the table, then per method a row of reference, frame, heat maps."""
+    esc = html.escape
+    table = _html_table(comparison)
+    gradient = ", ".join(
+        f"rgb({', '.join(str(round(255 * c)) for c in stop)})" for stop in MAGMA_STOPS
+    )
+    rows = []
+    for r in comparison.results:
+        files = _files(r.name)
+        rows.append(
+            _card("reference", "reference.png", "")
+            + _card(r.name, files["png"], f"PSNR {_psnr_text(r.metrics.psnr_db)} dB")
+            + _card(f"{r.name}: FLIP", files["flip"], f"mean {r.metrics.flip:.4f}")
+            + _card(f"{r.name}: relative error", files["relerr"], f"scale 0–{HEAT_SCALE:g}")
+        )
+    warning = (
+        ""
+        if comparison.reliable
+        else f'<p class="warn">{UNRELIABLE} unreliable: '
+        f"{esc(comparison.reference.unreliable_reason)}.</p>"
+    )
+    w, h = comparison.size
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>envstudio compare: {esc(comparison.scene)}</title>
+<style>
+body {{ font: 14px system-ui, sans-serif; margin: 1.5em; background: #1b1b1b; color: #ddd; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+th, td {{ padding: 0.3em 0.8em; border-bottom: 1px solid #444; }}
+td.n {{ text-align: right; font-variant-numeric: tabular-nums; }}
+.warn {{ color: #ffb454; }}
+.row {{ display: flex; flex-wrap: wrap; gap: 1em; margin-bottom: 1em; }}
+figure {{ margin: 0; }}
+figure img {{ width: {max(w, 256)}px; image-rendering: pixelated; display: block; }}
+figure img.extra {{ width: auto; image-rendering: auto; }}
+figcaption {{ font-size: 12px; color: #aaa; }}
+.legend {{ display: flex; align-items: center; gap: 0.5em; margin-bottom: 1em; }}
+.scale {{ width: 256px; height: 12px; background: linear-gradient(to right, {gradient}); }}
+</style>
+</head>
+<body>
+<h1>{esc(comparison.scene)}, {w}×{h}</h1>
+<p>reference: {esc(_reference_line(comparison))}</p>
+{table}
+{warning}
+<p>Metrics on the {esc(METRIC_NOTES["domain"])}. Heat maps: FLIP error over [0, 1];
+relative luminance error of the linear frames over [0, {HEAT_SCALE:g}]; grey: not measured.</p>
+<div class="legend"><span>0</span><div class="scale"></div><span>top of scale</span></div>
+{"".join(f'<div class="row">{row}</div>' for row in rows)}
+{_html_extras(comparison)}
+</body>
+</html>
+"""
+
+
+def _html_table(comparison: Comparison) -> str:
+    rows = []
+    for r in comparison.results:
+        m = r.metrics
+        mark = "" if r.reliable else UNRELIABLE
+        cells = [
+            f"<td>{html.escape(r.name)}</td>",
+            f'<td class="n">{_psnr_text(m.psnr_db)}{mark}</td>',
+            f'<td class="n">{m.ssim:.4f}{mark}</td>',
+            f'<td class="n">{m.flip:.4f}{mark}</td>',
+            f'<td class="n">{r.frame_ms["median_ms"]:.2f}</td>',
+            f"<td>{'yes' if r.reliable else 'no'}</td>",
+            f"<td>{html.escape(_matched_text(r))}</td>",
+        ]
+        rows.append(f"<tr>{''.join(cells)}</tr>")
+    head = "".join(
+        f"<th>{c}</th>"
+        for c in ("method", "PSNR (dB)", "SSIM", "FLIP", "ms/frame", "reliable", "matched")
+    )
+    return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+def _html_extras(comparison: Comparison) -> str:
+    """The methods' report sections: a heading, the text, the table, the images."""
+    esc = html.escape
+    parts = []
+    for name, sections in comparison.extras.items():
+        for extra in sections:
+            parts.append(f"<h2>{esc(name)}: {esc(extra.title)}</h2>\n<p>{esc(extra.text)}</p>")
+            if extra.columns:
+                head = "".join(f"<th>{esc(c)}</th>" for c in extra.columns)
+                body = "".join(
+                    "<tr>"
+                    + "".join(
+                        f"<td>{esc(c)}</td>" if k == 0 else f'<td class="n">{esc(c)}</td>'
+                        for k, c in enumerate(row)
+                    )
+                    + "</tr>"
+                    for row in extra.rows
+                )
+                parts.append(f"<table><tr>{head}</tr>{body}</table>")
+            if extra.images:
+                cards = "".join(_extra_image(file, caption) for file, caption in extra.images)
+                parts.append(f'<div class="row">{cards}</div>')
+    return "\n".join(parts)
+
+
+def _extra_image(image: str, caption: str) -> str:
+    """An image of a method's section at its own size (not the frames' width)."""
+    esc = html.escape
+    return (
+        f'<figure><img class="extra" src="{esc(image)}" alt="{esc(caption)}">'
+        f"<figcaption>{esc(caption)}</figcaption></figure>"
+    )
+
+
+def _card(title: str, image: str, caption: str) -> str:
+    esc = html.escape
+    return (
+        f'<figure><img src="{esc(image)}" alt="{esc(title)}">'
+        f"<figcaption>{esc(title)}{' — ' + esc(caption) if caption else ''}</figcaption></figure>"
+    )
+
+
+def _reference_line(comparison: Comparison) -> str:
+    """Samples and time, the stopping rule and what stopped it, the noise, the half-change."""
+    ref = comparison.reference
+    change = ref.status.rms_change
+    state = "converged" if ref.converged else "NOT converged"
+    half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
+    limit = float(ref.parameters.get("time_limit", 0.0))
+    budget = f"budget {ref.parameters['max_samples']} spp" + (
+        f", time limit {limit:g} s" if limit > 0 else ""
+    )
+    return (
+        f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s); "
+        f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: {STOPPED_BY[ref.stopped_by]}; "
+        f"noise (median relative standard error) {_percent(ref.relative_standard_error)}; {half} "
+        f"(tolerance {100 * float(ref.parameters['tolerance']):.3g} %, {budget}): {state}"
+    )
+
+
+def _rule_text(rule: str) -> str:
+    if rule == NOISE_RULE:
+        return f"noise < {NOISE_SHARE:g} × each method's median relative error (default)"
+    return "half-change < tolerance (strict)"
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.3g} %" if math.isfinite(value) else "—"
+
+
+def _matched_text(result: MethodResult) -> str:
+    text = ", ".join(f"{k}={_value_text(v)}" for k, v in result.matched.items()) or "none"
+    return f"{text} ({result.glossiness})" if result.glossiness else text
+
+
+def _value_text(value: object) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _psnr_text(value: float) -> str:
+    return "∞" if math.isinf(value) else f"{value:.2f}"
+
+
+def _number(value: float) -> float | str:
+    """A float, or ``"inf"`` for +infinity (JSON has none)."""
+    return "inf" if math.isinf(value) else value
+
+
+def _files(name: str) -> dict[str, str]:
+    return {
+        "exr": f"{name}.exr",
+        "png": f"{name}.png",
+        "flip": f"{name}.flip.png",
+        "relerr": f"{name}.relerr.png",
+    }

@@ -1,0 +1,227 @@
+"""When ``envstudio compare`` stops accumulating the reference.
+
+Two rules:
+
+``noise`` (the default)
+    A method's numbers count as reliable when the reference's own noise (its
+    median relative standard error over the reflector,
+    :meth:`GroundTruth.relative_standard_error`) is under
+    :data:`NOISE_SHARE` of that method's median relative error against the
+    reference; the reference stops as soon as this holds for every compared
+    method. The methods are rendered first (one frame each) and their errors
+    are judged against the current estimate at the reference's checkpoints
+    (:func:`~envstudio.measure.ground_truth.is_checkpoint`) and every
+    :data:`JUDGE_INTERVAL_S` seconds, never before :data:`MIN_JUDGED_BATCHES`
+    batches (with fewer, the spread of the batch means underestimates the
+    noise).
+``tolerance`` (strict)
+    The reference's own successive-half criterion: it stops when the change
+    falls below ``tolerance``. Used with ``--strict``, when ``tolerance`` is
+    given explicitly, and when only the reference itself is compared.
+
+Under either rule the reference also stops on its sample budget
+(``max_samples``) or its time limit (``time_limit``). Noise falls as
+1/sqrt(samples), so the samples still needed are projected from the current
+noise and the smallest error, and the time from this run's samples per second.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core.metrics import relative_error
+from envstudio.measure.ground_truth import GroundTruth, duration, is_checkpoint
+from envstudio.render.registry import ground_truth_class
+
+NOISE_SHARE = 0.1
+"""Largest ratio of reference noise to a method's error for its metrics to count as reliable."""
+NOISE_RULE = "noise"
+TOLERANCE_RULE = "tolerance"
+JUDGE_INTERVAL_S = 5.0
+"""Longest wait between two judgements, s (checkpoints grow far apart late in a run)."""
+MIN_JUDGED_BATCHES = 8
+"""Batches before the noise rule may stop: the median of the per-pixel spread of k batch
+means is biased low by a factor sqrt(median(chi²_{k-1}) / (k - 1)), 0.95 at k = 8."""
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """The reference's noise and each method's error against it, at one moment.
+
+    Attributes
+    ----------
+    batches, samples : int
+        The reference's batches and samples per pixel.
+    seconds : float
+        Wall seconds of this run's accumulation (:meth:`ConvergenceStatus.run_elapsed`).
+    noise : float
+        Median relative standard error of the reference over the reflector.
+    errors : dict
+        Method name → median relative luminance error against the reference.
+    """
+
+    batches: int
+    samples: int
+    seconds: float
+    noise: float
+    errors: dict[str, float]
+
+    def reliable(self, name: str) -> bool:
+        """Whether method ``name``'s numbers can be trusted by the noise rule."""
+        return self.noise < NOISE_SHARE * self.errors[name]
+
+    @property
+    def all_reliable(self) -> bool:
+        """Every method's numbers can be trusted."""
+        return all(self.reliable(name) for name in self.errors)
+
+    @property
+    def target(self) -> float:
+        """The noise to reach: :data:`NOISE_SHARE` of the smallest error."""
+        return NOISE_SHARE * min(self.errors.values(), default=math.inf)
+
+
+def choose_rule(names: list[str], reference_values: dict[str, object], strict: bool) -> str:
+    """The stopping rule of a comparison of ``names``.
+
+    Parameters
+    ----------
+    names
+        The methods compared.
+    reference_values
+        The reference's ``--param`` values (a ``tolerance`` among them asks for the strict rule).
+    strict
+        ``--strict``.
+
+    Returns
+    -------
+    str
+        :data:`TOLERANCE_RULE` when strict, when ``tolerance`` is given, or when no method but
+        the reference is compared (nothing to judge the noise against); else :data:`NOISE_RULE`.
+    """
+    truth = ground_truth_class().name
+    others = [name for name in names if name != truth]
+    if strict or "tolerance" in reference_values or not others:
+        return TOLERANCE_RULE
+    return NOISE_RULE
+
+
+def median_error(
+    hdr: npt.NDArray[np.float32], reference_hdr: npt.NDArray[np.float32], mask: npt.NDArray
+) -> float:
+    """Median over ``mask`` of the relative luminance error (core/metrics.py) of ``hdr``."""
+    return float(np.median(relative_error(hdr, reference_hdr)[mask]))
+
+
+class ReferenceJudge:
+    """Judges the methods' errors against the reference as it accumulates.
+
+    Parameters
+    ----------
+    rule : str
+        :data:`NOISE_RULE` or :data:`TOLERANCE_RULE`; under the tolerance rule
+        the judgements are shown but never stop the reference.
+    frames : dict
+        Method name → its linear HDR frame, (h, w, 3) float32 (the reference excluded).
+
+    Attributes
+    ----------
+    last : Judgement or None
+        The latest judgement.
+    """
+
+    def __init__(self, rule: str, frames: dict[str, npt.NDArray[np.float32]]):
+        self.rule = rule
+        self.frames = frames
+        self.last: Judgement | None = None
+        self._first: Judgement | None = None
+        self._judged_at = -math.inf
+
+    def due(self, batches: int) -> bool:
+        """Whether to judge after the reference's frame at ``batches``.
+
+        At the first frame, at checkpoints, and when :data:`JUDGE_INTERVAL_S`
+        has passed; never twice at one batch count.
+        """
+        if not self.frames or (self.last is not None and self.last.batches == batches):
+            return False
+        waited = time.perf_counter() - self._judged_at >= JUDGE_INTERVAL_S
+        return self.last is None or is_checkpoint(batches) or waited
+
+    def judge(
+        self,
+        reference: GroundTruth,
+        reference_hdr: npt.NDArray[np.float32],
+        mask: npt.NDArray[np.bool_],
+    ) -> Judgement:
+        """Measure the noise and every method's error against ``reference_hdr`` over ``mask``."""
+        status = reference.status
+        judgement = Judgement(
+            batches=status.batches,
+            samples=status.samples,
+            seconds=status.run_elapsed(),
+            noise=reference.relative_standard_error(),
+            errors={
+                name: median_error(hdr, reference_hdr, mask) for name, hdr in self.frames.items()
+            },
+        )
+        self.record(judgement)
+        return judgement
+
+    def record(self, judgement: Judgement) -> None:
+        """Make ``judgement`` the latest (the first one sets the start of the rate)."""
+        self.last = judgement
+        if self._first is None:
+            self._first = judgement
+        self._judged_at = time.perf_counter()
+
+    def satisfied(self) -> bool:
+        """The noise rule holds for every method (never under the tolerance rule)."""
+        last = self.last
+        return (
+            self.rule == NOISE_RULE
+            and last is not None
+            and last.batches >= MIN_JUDGED_BATCHES
+            and last.all_reliable
+        )
+
+    def seconds_left(self) -> float | None:
+        """Projected seconds until the noise reaches :attr:`Judgement.target`.
+
+        Noise ∝ 1/sqrt(samples): the samples needed are samples × (noise /
+        target)²; the rate is this run's samples per second between the first
+        judgement and the last. None without a rate or a finite target.
+        """
+        first, last = self._first, self.last
+        if last is None or not (math.isfinite(last.noise) and 0 < last.target < math.inf):
+            return None
+        needed = last.samples * (last.noise / last.target) ** 2
+        if needed <= last.samples:
+            return 0.0
+        spent = last.seconds - first.seconds
+        if last.samples <= first.samples or spent <= 0:
+            return None
+        rate = (last.samples - first.samples) / spent
+        return (needed - last.samples) / rate
+
+    def progress_line(self) -> str:
+        """The noise, each method's error (✓ when reliable) and the projected time left."""
+        last = self.last
+        if last is None:
+            return ""
+        noise = f"{100 * last.noise:.3g} %" if math.isfinite(last.noise) else "—"
+        errors = ", ".join(
+            f"{name} {100 * error:.3g} %{' ✓' if last.reliable(name) else ''}"
+            for name, error in last.errors.items()
+        )
+        line = f"noise {noise} (needs < {100 * last.target:.3g} %); errors: {errors}"
+        left = self.seconds_left()
+        if self.rule == NOISE_RULE and left is not None:
+            since = time.perf_counter() - self._judged_at
+            line += f"; ≈ {duration(left - since)} to go"
+        return line

@@ -1,0 +1,597 @@
+"""The PEM bake as a job: one work unit per view, saved as it finishes, resumable (seed 003 §3).
+
+Seed 003 §3 ("System Overview") ray traces and infers EMs independently for
+every sample of the parameter space, so a view is the work unit:
+:func:`bake_view` takes a picklable :class:`ViewTask` and returns plain arrays
+(it builds and caches the scene's tracer in its own process), so the same unit
+runs in-process, on a local process pool (:func:`run_bake`, concurrent.futures)
+or on a Dask cluster (``scheduler``: a scheduler address, or ``"local"`` for a
+``dask.distributed.LocalCluster`` of two worker processes; the ``cluster`` extra).
+
+Resume: every finished view is written atomically to ``OUT.pem.parts/view-NNNNN.npz``
+(its arrays, a checksum, and the key of the bake it belongs to: scene file,
+environment pixels, parameters and camera). A rerun verifies and reuses the
+parts whose key matches and redoes the rest. ``OUT.pem`` (:mod:`.pem_file`) is
+written atomically only when every view is present and verified, then the parts
+folder is removed; an interrupted bake leaves nothing under ``OUT.pem``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import multiprocessing
+import os
+import shutil
+import signal
+import time
+import zipfile
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from envstudio.io.atomic import atomic_path, check_output_path
+from envstudio.io.scene_file import load_scene, resolve_scene
+from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
+from envstudio.methods.pem.bake.infer import distant_box, local_ellipsoid
+from envstudio.methods.pem.bake.lookups import (
+    LOD_BIAS,
+    MODELS,
+    PLAYBACK,
+    PixelLookups,
+    pixel_lookups,
+)
+from envstudio.methods.pem.bake.mip import mip_sizes
+from envstudio.methods.pem.bake.models import infer_view_models, playback_psnr, predict, static_em
+from envstudio.methods.pem.bake.pem_file import FORMAT, VERSION, PemBake, save_pem
+from envstudio.methods.pem.bake.trace import TRACE_BOUNCES, SceneTracer
+from envstudio.methods.pem.bake.views import ViewSpace
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = [
+    "DASK_CONNECT_TIMEOUT",
+    "BakeReport",
+    "ViewTask",
+    "bake_view",
+    "part_keys",
+    "parts_folder",
+    "run_bake",
+]
+
+#: Seconds a ``--scheduler ADDRESS`` has to answer before the bake gives up.
+DASK_CONNECT_TIMEOUT = 10.0
+
+
+def part_keys(em_size: int) -> list[str]:
+    """Names of a view's arrays (:func:`bake_view`) saved in its part file."""
+    keys = [f"{m}_{k}" for m in MODELS for k in range(len(mip_sizes(em_size)))]
+    return keys + [f"psnr_{m}" for m in MODELS] + [f"playback_{n}" for n in PLAYBACK]
+
+
+@dataclass(frozen=True)
+class ViewTask:
+    """One work unit: trace one view and infer each part's EM models, all MIP levels.
+
+    Attributes
+    ----------
+    scene : str
+        Resolved scene file path (each worker loads and caches it).
+    index : int
+        The view's position in ``ViewSpace.cameras()``.
+    azimuth, elevation, distance : float
+        Orbit camera, degrees and scene units.
+    target : tuple of float
+    fov_y : float
+    size, samples : int
+        Trace resolution R and rays per pixel.
+    em_size : int
+        Cube face edge n.
+    smoothness : float
+        λ of :func:`~envstudio.methods.pem.bake.infer.solve_mip`.
+    seed : int
+        Jitter seed; the view traces with ``seed + index``.
+    tie : float
+        μ of :func:`~envstudio.methods.pem.bake.infer.solve_mip` (coarse-to-fine ties).
+    lod_bias : float
+        Added to every lookup's MIP level (:data:`~envstudio.methods.pem.bake.lookups.LOD_BIAS`).
+    lookups : str
+        ``gl``: the per-pixel lookups rendered by the playback shader itself
+        (``gl_lookups``), so that A is the playback's on this GL; ``cpu``:
+        computed from pixel-centre rays (methods/pem/bake/lookups.py), the same up
+        to the level, which the GL takes from its own derivatives.
+    gl_lookups : type or None
+        The GL lookups' class (methods/pem/lookups_gl.py's ``GlLookups``), which a
+        worker imports by name when it unpickles the task: the bake itself never
+        imports GL.
+    """
+
+    scene: str
+    index: int
+    azimuth: float
+    elevation: float
+    distance: float
+    target: tuple[float, float, float]
+    fov_y: float
+    size: int
+    samples: int
+    em_size: int
+    smoothness: float
+    seed: int
+    tie: float = 1e-3
+    lod_bias: float = LOD_BIAS
+    lookups: str = "gl"
+    gl_lookups: type | None = None
+
+    def camera(self) -> OrbitCamera:
+        """The view's camera."""
+        return OrbitCamera(
+            azimuth=self.azimuth,
+            elevation=self.elevation,
+            distance=self.distance,
+            target=np.array(self.target, dtype=np.float64),
+            fov_y=self.fov_y,
+        )
+
+
+_CONTEXTS: dict[str, dict] = {}
+
+
+def _context(scene_path: str) -> dict:
+    """The scene, its tracer and its view-independent bake data, once per process."""
+    if scene_path not in _CONTEXTS:
+        scene = load_scene(scene_path)
+        tracer = SceneTracer(scene)
+        local = [local_ellipsoid(tracer, p) for p in range(len(tracer.part_names))]
+        _CONTEXTS[scene_path] = {
+            "scene": scene,
+            "tracer": tracer,
+            "box": distant_box(scene),
+            "ellipsoids": [g for g, _ in local],
+            "origins": np.array([o for _, o in local]),
+            "hull": reflector_hulls(scene),
+            "static": {},
+        }
+    return _CONTEXTS[scene_path]
+
+
+def _view_lookups(ctx: dict, task: ViewTask, camera: OrbitCamera) -> PixelLookups:
+    """The playback's per-pixel lookups of the view, by ``task.lookups``."""
+    box, ellipsoids, origins = ctx["box"], ctx["ellipsoids"], ctx["origins"]
+    if task.lookups == "cpu":
+        return pixel_lookups(
+            ctx["tracer"], camera, task.size, task.em_size, box, ellipsoids, origins
+        )
+    if task.gl_lookups is None:
+        raise ValueError("a view task with lookups 'gl' needs gl_lookups (GlLookups)")
+    if "gl" not in ctx:
+        ctx["gl"] = task.gl_lookups(ctx["scene"])  # one headless context per worker process
+    return ctx["gl"].render(
+        camera,
+        task.size,
+        task.em_size,
+        np.array([box.lo, box.hi]),
+        origins,
+        np.array([[e.centre, e.radii] for e in ellipsoids]),
+    )
+
+
+def resolve_lookups(lookups: str, gl_lookups: type | None) -> str:
+    """``auto`` → ``gl`` when ``gl_lookups`` can make a GL context here, else ``cpu``.
+
+    Parameters
+    ----------
+    lookups
+        ``auto``, ``gl`` or ``cpu``.
+    gl_lookups
+        The GL lookups' class, whose ``unavailable()`` says why no context can be
+        made (None when one can); None: no GL here.
+
+    Raises
+    ------
+    ValueError
+        An unknown choice, or ``gl`` where no context can be made.
+    """
+    if lookups not in ("auto", "gl", "cpu"):
+        raise ValueError(f"--lookups {lookups}: expected auto, gl or cpu")
+    if lookups == "cpu":
+        return "cpu"
+    reason = "no GL lookups given" if gl_lookups is None else gl_lookups.unavailable()
+    if reason is None:
+        return "gl"
+    if lookups == "gl":
+        raise ValueError(f"--lookups gl: no GL context ({reason}); use --lookups cpu")
+    return "cpu"
+
+
+def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
+    """Trace one view and infer every part's EM models (seed 003 §4, methods/pem/bake/models.py).
+
+    Parameters
+    ----------
+    task
+        The work unit.
+
+    Returns
+    -------
+    dict
+        ``{model}_{k}`` (P, 6, n_k, n_k, C) float32 for each model of
+        :data:`~envstudio.methods.pem.bake.lookups.MODELS` and level k (0 for a part not
+        in the view), ``psnr_{model}`` (P,) float64 fit PSNR (NaN for such a part),
+        ``playback_{name}`` 0-d float64 predicted playback PSNR for ``layered``,
+        ``sphere``, ``static``, and ``trace_seconds``, ``infer_seconds`` (0-d
+        float64; inference includes the lookups and the predictions).
+    """
+    ctx = _context(task.scene)
+    tracer, n = ctx["tracer"], task.em_size
+    camera = task.camera()
+    view = tracer.trace(camera, task.size, task.samples, task.seed + task.index)
+    start = time.perf_counter()
+    lookups = _view_lookups(ctx, task, camera)
+    models = infer_view_models(
+        view,
+        lookups,
+        n,
+        ctx["hull"],
+        smoothness=task.smoothness,
+        tie=task.tie,
+        lod_bias=task.lod_bias,
+    )
+    if n not in ctx["static"]:
+        ctx["static"][n] = static_em(tracer, ctx["scene"].reflector_centre(), n)
+    predicted = predict(view, lookups, models, n, ctx["hull"], ctx["static"][n])
+    scores = playback_psnr(view, lookups, predicted)
+    out: dict[str, np.ndarray] = {}
+    for model in MODELS:
+        for k, level in enumerate(models.maps(model, n)):
+            out[f"{model}_{k}"] = level
+        out[f"psnr_{model}"] = models.psnr(model)
+    for name in PLAYBACK:
+        out[f"playback_{name}"] = np.array(scores[name], dtype=np.float64)
+    out["trace_seconds"] = np.array(view.seconds)
+    out["infer_seconds"] = np.array(time.perf_counter() - start)
+    return out
+
+
+@dataclass
+class BakeReport:
+    """What :func:`run_bake` did.
+
+    Attributes
+    ----------
+    bake : PemBake
+        The bake written.
+    path : Path
+        The ``.pem`` file.
+    baked, reused : list of int
+        View indices traced in this run, and taken from the parts folder.
+    seconds : float
+        Wall time.
+    trace_seconds, infer_seconds : list of float
+        Per view baked in this run.
+    """
+
+    bake: PemBake
+    path: Path
+    baked: list[int] = field(default_factory=list)
+    reused: list[int] = field(default_factory=list)
+    seconds: float = 0.0
+    trace_seconds: list[float] = field(default_factory=list)
+    infer_seconds: list[float] = field(default_factory=list)
+
+
+def parts_folder(output: str | os.PathLike) -> Path:
+    """The resume folder of a bake to ``output``: ``output`` + ``.parts``."""
+    return Path(f"{output}.parts")
+
+
+def _bake_key(scene_path: Path, scene, parameters: dict) -> str:
+    digest = hashlib.sha256(f"{FORMAT} {VERSION}".encode())
+    digest.update(scene_path.read_bytes())
+    digest.update(np.ascontiguousarray(scene.environment.radiance, np.float32).tobytes())
+    digest.update(json.dumps(parameters, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def _part_checksum(arrays: dict[str, np.ndarray], header: dict) -> str:
+    digest = hashlib.sha256(json.dumps(header, sort_keys=True).encode())
+    for name in part_keys(header["task"]["em_size"]):
+        digest.update(np.ascontiguousarray(arrays[name]).tobytes())
+    return digest.hexdigest()
+
+
+def _part_header(key: str, task: ViewTask) -> dict:
+    """The part's identity: the bake's key and the task (its GL lookups' class is how, not what)."""
+    fields = {k: v for k, v in asdict(task).items() if k != "gl_lookups"}
+    return {"key": key, "task": fields}
+
+
+def _save_part(path: Path, key: str, task: ViewTask, result: dict) -> None:
+    arrays = {k: np.array(result[k], order="C") for k in part_keys(task.em_size)}
+    header = _part_header(key, task)
+    meta = {"header": header, "checksum": _part_checksum(arrays, header)}
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez(f, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)
+
+
+def _load_part(path: Path, key: str, task: ViewTask) -> dict | None:
+    """The part's arrays if it is readable, of this bake and view, and intact; else None."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            arrays = {k: np.asarray(data[k]) for k in part_keys(task.em_size)}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return None
+    header = _part_header(key, task)
+    if json.loads(json.dumps(header)) != meta.get("header"):
+        return None
+    if meta.get("checksum") != _part_checksum(arrays, header):
+        return None
+    return arrays
+
+
+def _ignore_interrupts() -> None:  # worker initializer: the parent handles Ctrl-C
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _map_local(tasks, workers: int):
+    """Yield (task, result) as views finish, in-process (workers 0) or on a process pool."""
+    if workers == 0:
+        for task in tasks:
+            yield task, bake_view(task)
+        return
+    context = multiprocessing.get_context("spawn")  # no fork after Embree's threads start
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_ignore_interrupts)
+    pending = {pool.submit(bake_view, t): t for t in tasks}
+    try:
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield pending.pop(future), future.result()
+    except BaseException:
+        for future in pending:
+            future.cancel()
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _dask_client(scheduler: str, timeout: float, workers: int = 2):
+    """(client, cluster or None): a new LocalCluster for ``"local"``, else the scheduler's.
+
+    Raises
+    ------
+    ValueError
+        One line: distributed is not installed, or no scheduler answered at the
+        address within ``timeout`` seconds.
+    """
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:  # pragma: no cover - the cluster extra is in the lock
+        raise ValueError(
+            "a Dask bake needs dask and distributed: pip install 'envmap-studio[cluster]'"
+        ) from None
+    if scheduler == "local":
+        # worker processes start with spawn (distributed's default): no fork after Embree
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        return Client(cluster), cluster
+    try:
+        return Client(scheduler, timeout=timeout), None
+    except (OSError, TimeoutError, ValueError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(
+            f"--scheduler {scheduler}: no Dask scheduler answered within {timeout:g} s ({reason})"
+        ) from None
+
+
+def _map_dask(tasks, client):
+    """Yield (task, result) as views finish on a Dask cluster."""
+    from dask.distributed import as_completed
+
+    futures = {client.submit(bake_view, t, pure=False): t for t in tasks}
+    try:
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+
+
+def run_bake(
+    scene: str | os.PathLike,
+    views: ViewSpace | Callable[[OrbitCamera], ViewSpace],
+    output: str | os.PathLike,
+    size: int = 256,
+    samples: int = 4,
+    em_size: int = 64,
+    smoothness: float = 1e-3,
+    seed: int = 0,
+    workers: int | None = None,
+    on_view: Callable[[int, dict], None] | None = None,
+    bar=None,
+    scheduler: str | None = None,
+    tie: float | None = None,
+    connect_timeout: float | None = None,
+    dask_workers: int = 2,
+    lod_bias: float = LOD_BIAS,
+    lookups: str = "auto",
+    gl_lookups: type | None = None,
+) -> BakeReport:
+    """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
+
+    Parameters
+    ----------
+    scene
+        Shipped scene name or TOML scene file.
+    views
+        The parameter space, or a function of the scene's camera returning it
+        (e.g. ``lambda c: arc_views(c, 100, 1.0)``).
+    output
+        The ``.pem`` path; its folder must exist.
+    size, samples, em_size, smoothness, seed
+        Trace resolution R, rays per pixel, finest cube face edge n (all levels
+        n >> k down to 1 are inferred), λ, jitter seed.
+    workers
+        Processes of the local pool; 0 bakes in this process; None: one per core,
+        at most one per view.
+    on_view
+        Called with (index, result) after each view's part is saved.
+    bar
+        A tqdm bar over views (``total`` and ``initial`` are set here).
+    scheduler
+        Bake on a Dask cluster instead of the local pool (``workers`` is then
+        ignored): a scheduler address (``tcp://host:8786``), or ``"local"`` to start
+        a ``LocalCluster`` (two worker processes, one thread each) and close it
+        after. One future per unfinished view; parts are saved as they complete.
+        An address that does not answer within ``connect_timeout`` seconds
+        (default :data:`DASK_CONNECT_TIMEOUT`) raises a one-line ValueError before
+        anything is written.
+    tie
+        μ, the coarse-to-fine MIP ties (default: ``smoothness``).
+    connect_timeout
+        See ``scheduler``.
+    dask_workers
+        Worker processes of the ``"local"`` cluster.
+    lod_bias
+        Added to every lookup's level; stored as ``parameters["lod_bias"]`` for the
+        playback to add too.
+    lookups
+        ``auto`` (GL when a context can be made, else CPU), ``gl`` or ``cpu``: where
+        the per-pixel lookups A is built from come from (:class:`ViewTask`); stored
+        as ``parameters["lookups"]``.
+    gl_lookups
+        The GL lookups' class (:class:`ViewTask`); None bakes with ``cpu`` lookups.
+
+    Returns
+    -------
+    BakeReport
+    """
+    start = time.perf_counter()
+    output = check_output_path(output)
+    scene_path = resolve_scene(scene)
+    scene_obj = load_scene(scene_path)
+    tracer = SceneTracer(scene_obj)  # raises ValueError for a scene without a reflector
+    space = views if isinstance(views, ViewSpace) else views(scene_obj.camera)
+    tie = float(smoothness if tie is None else tie)
+    lookups = resolve_lookups(lookups, gl_lookups)
+    parameters = {
+        "size": int(size),
+        "samples": int(samples),
+        "em_size": int(em_size),
+        "levels": len(mip_sizes(int(em_size))),
+        "smoothness": float(smoothness),
+        "tie": tie,
+        "lod_bias": float(lod_bias),
+        "seed": int(seed),
+        "bounces": TRACE_BOUNCES,
+        "geometries": {"distant": "box", "local": "ellipsoid", "sphere": "infinity"},
+        "lookup": "pixel centre, trilinear (bake/pem/lookups.py)",
+        "lookups": lookups,
+        "hull": "convex hull of all reflector parts",
+    }
+    key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
+    tasks = [
+        ViewTask(
+            str(scene_path.resolve()),
+            i,
+            float(c.azimuth),
+            float(c.elevation),
+            float(c.distance),
+            tuple(float(t) for t in c.target),
+            float(c.fov_y),
+            int(size),
+            int(samples),
+            int(em_size),
+            float(smoothness),
+            int(seed),
+            tie,
+            float(lod_bias),
+            lookups,
+            gl_lookups if lookups == "gl" else None,
+        )
+        for i, c in enumerate(space.cameras())
+    ]
+    folder = parts_folder(output)
+    results: dict[int, dict] = {}
+    report = BakeReport(bake=None, path=output)  # type: ignore[arg-type]
+    for task in tasks:
+        part = _load_part(folder / f"view-{task.index:05d}.npz", key, task)
+        if part is not None:
+            results[task.index] = part
+            report.reused.append(task.index)
+    todo = [t for t in tasks if t.index not in results]
+    client = cluster = None
+    if scheduler is not None and todo:  # before anything is written: it may not answer
+        timeout = DASK_CONNECT_TIMEOUT if connect_timeout is None else float(connect_timeout)
+        client, cluster = _dask_client(scheduler, timeout, dask_workers)
+    try:
+        folder.mkdir(exist_ok=True)
+        if bar is not None:
+            bar.total, bar.initial, bar.n = len(tasks), len(results), len(results)
+            bar.refresh()
+        count = min(os.cpu_count() or 1, len(todo)) if workers is None else int(workers)
+        if client is not None:
+            finished = _map_dask(todo, client)
+        else:
+            finished = _map_local(todo, max(0, min(count, len(todo))))
+        keys = part_keys(int(em_size))
+        for task, result in finished:
+            _save_part(folder / f"view-{task.index:05d}.npz", key, task, result)
+            results[task.index] = {k: result[k] for k in keys}
+            report.baked.append(task.index)
+            report.trace_seconds.append(float(result["trace_seconds"]))
+            report.infer_seconds.append(float(result["infer_seconds"]))
+            if bar is not None:
+                bar.set_postfix_str(
+                    f"view {task.index}: trace {float(result['trace_seconds']):.1f} s, "
+                    f"infer {float(result['infer_seconds']):.1f} s"
+                )
+                bar.update(1)
+            if on_view is not None:
+                on_view(task.index, result)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    bake = _assemble(scene_obj, tracer, space, parameters, tasks, results, int(em_size))
+    save_pem(output, bake)
+    shutil.rmtree(folder, ignore_errors=True)
+    report.bake = bake
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _assemble(scene, tracer, space, parameters, tasks, results, em_size) -> PemBake:
+    """The :class:`PemBake` of every view's part arrays, in view order."""
+    box = distant_box(scene)
+    ellipsoids, origins = [], []
+    for p in range(len(tracer.part_names)):
+        geometry, origin = local_ellipsoid(tracer, p)
+        ellipsoids.append([geometry.centre, geometry.radii])
+        origins.append(origin)
+    order = [results[t.index] for t in tasks]
+    levels = range(len(mip_sizes(em_size)))
+    return PemBake(
+        scene=scene.name,
+        view_space=space.describe(),
+        parts=list(tracer.part_names),
+        parameters=parameters,
+        maps={m: [np.stack([r[f"{m}_{k}"] for r in order]) for k in levels] for m in MODELS},
+        hull=reflector_hulls(scene),
+        mesh_checks=[mesh_check(node) for node in scene.reflectors()],
+        psnr={m: np.stack([r[f"psnr_{m}"] for r in order]) for m in MODELS},
+        playback_psnr={n: np.array([float(r[f"playback_{n}"]) for r in order]) for n in PLAYBACK},
+        cameras=np.array([[t.azimuth, t.elevation] for t in tasks], dtype=np.float64),
+        box=np.stack([box.lo, box.hi]),
+        origins=np.array(origins, dtype=np.float64),
+        ellipsoids=np.array(ellipsoids, dtype=np.float64),
+    )

@@ -1,0 +1,497 @@
+"""Segmented ray tracing of one view for a PEM bake (seed 003 §3, §4 "Layered EMs", Figure 4).
+
+Embree (through embreex) intersects the scene's world-space triangles, vectorised
+over all rays of a view: R × R pixels with ``samples`` jittered rays each.
+
+What a primary ray returns
+--------------------------
+- It misses: the environment's radiance along it (bilinear lat-long lookup).
+- It hits a local object: albedo/π · E_sh9(n), the SH9 irradiance of the
+  environment along the shading normal turned towards the ray, as the frame and
+  shaders/reference/paths.glsl draw local diffuse objects.
+- It hits a reflector part p at a point with shading normal n (turned towards
+  the viewer, as common/eq8.glsl does), view direction v and mirror direction
+  r = reflect(−v, n). The sample then records, for part p (Figure 4):
+
+  * diffuse  d = k_d/π · E_sh9(n), the diffuse radiance of eq. 8 of seed 000
+    (unweighted by Fresnel, unshadowed, as the playback draws it);
+  * Fresnel  F = f_λ + (1 − f_λ)(1 − r·n)^5, clamped as shaders/common/fresnel.glsl;
+  * distant  D: the ray along r traced through local objects only. The reflector
+    parts are transparent to it ("the ray tracer propagates rays through the
+    reflecting object if they intersect after the first bounce", §4), so D is
+    defined for every sample of the part;
+  * local    the ray along r traced through everything: when its first hit is a
+    reflector (any part), the sample is local (alpha 1) with colour the radiance
+    of that hit — the same eq. 8 shading, continuing along mirror directions for
+    at most :data:`TRACE_BOUNCES` traces after the first hit, then black, as
+    paths.glsl bounds its paths. Otherwise the sample is not local (alpha 0) and
+    what it sees is D.
+
+  and its ground-truth radiance (1 − F)·d + F·I with I the radiance along r.
+
+Composition (Figure 4 and §4 "Layered EMs")
+-------------------------------------------
+Per pixel of part p, with α_L the local alpha, L the local colour, D the distant
+layer, F the Fresnel layer and d the diffuse layer::
+
+    incident  I = α_L·L + (1 − α_L)·D                 (the "over" of §4)
+    part      C_p = (1 − F)·d + F·I                   (seed 000 eq. 8, common/eq8.glsl)
+    composite C = B + Σ_p c_p·C_p
+
+where c_p is the fraction of the pixel's samples that hit part p and B the
+background (samples hitting local objects or nothing, divided by the sample
+count). The paper writes the reflector as ``diffuse + (α_L rgb_L + (1 − α_L)
+rgb_D)·F``: the same, its diffuse layer being (1 − F)·d, which
+:meth:`TracedView.diffuse_term` returns. With one sample per pixel the
+recombination is exact; with several it is exact up to the variation of F, d,
+D within a pixel (layers are per-pixel means: D and F over the part's samples,
+L over its local samples).
+
+Reflectors are traced as perfect mirrors (the paper's teapot); their glossy
+lobe (``phong_exponent``) is not sampled.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+from embreex import mesh_construction, rtcore_scene
+
+from envstudio.core.fresnel import schlick
+from envstudio.core.resample import sample_latlong
+from envstudio.core.sh import irradiance_sh9, project_latlong_sh9
+from envstudio.core.transforms import normal_matrix
+from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.graph import Scene
+
+#: Traces after the first reflector hit before a path returns black
+#: (methods/reference/tracing.py TRACE_BOUNCES, shaders/reference/paths.glsl).
+TRACE_BOUNCES = 3
+
+
+@dataclass
+class TracedView:
+    """Segmented layers of one view (seed 003 Figure 4).
+
+    Attributes
+    ----------
+    camera : OrbitCamera
+        The view.
+    size : int
+        R; images are R × R, row 0 at the top.
+    samples : int
+        Rays per pixel.
+    part_names : list of str
+        The P reflector parts (reflector nodes of the scene), in scene order.
+    composite : (R, R, 3) float32
+        Ground truth: mean radiance of each pixel's samples.
+    background : (R, R, 3) float32
+        Sum of the radiance of samples not hitting a reflector, over ``samples``.
+    coverage : (P, R, R) float32
+        Fraction of each pixel's samples that hit the part.
+    diffuse : (P, R, R, 3) float32
+        Diffuse layer d = k_d/π · E_sh9(n), mean over the part's samples.
+    fresnel : (P, R, R) float32
+        Fresnel modulation layer F (Schlick), mean over the part's samples.
+    distant : (P, R, R, 3) float32
+        Distant layer D (reflector transparent after the first bounce), mean over the
+        part's samples; defined wherever coverage > 0.
+    local_rgb : (P, R, R, 3) float32
+        Local colour layer L, mean over the part's local samples (0 where none).
+    local_alpha : (P, R, R) float32
+        Local coverage α_L: fraction of the part's samples whose reflection hits a
+        reflector.
+    seconds : float
+        Wall time of the trace.
+    ray_pixel : (k,) int64, optional
+        For each of the k samples that hit a reflector, its pixel row·R + column.
+    ray_part : (k,) int64, optional
+        The part each such sample hit.
+    ray_point : (k, 3) float32, optional
+        Its hit point (world space, offset along the normal as the tracer
+        continues the ray from it).
+    ray_normal : (k, 3) float32, optional
+        Its unit shading normal, turned towards the viewer.
+    ray_direction : (k, 3) float32, optional
+        Its unit reflection direction r = reflect(−v, n): what EM inference
+        intersects with the EM geometry (seed 003 §4, "EM Representations").
+    """
+
+    camera: OrbitCamera
+    size: int
+    samples: int
+    part_names: list[str]
+    composite: npt.NDArray[np.float32]
+    background: npt.NDArray[np.float32]
+    coverage: npt.NDArray[np.float32]
+    diffuse: npt.NDArray[np.float32]
+    fresnel: npt.NDArray[np.float32]
+    distant: npt.NDArray[np.float32]
+    local_rgb: npt.NDArray[np.float32]
+    local_alpha: npt.NDArray[np.float32]
+    seconds: float = 0.0
+    ray_pixel: npt.NDArray[np.int64] | None = None
+    ray_part: npt.NDArray[np.int64] | None = None
+    ray_point: npt.NDArray[np.float32] | None = None
+    ray_normal: npt.NDArray[np.float32] | None = None
+    ray_direction: npt.NDArray[np.float32] | None = None
+
+    def incident(self) -> npt.NDArray[np.float64]:
+        """(P, R, R, 3) incident specular layer α_L·L + (1 − α_L)·D (local over distant)."""
+        a = self.local_alpha[..., None].astype(np.float64)
+        return a * self.local_rgb + (1.0 - a) * self.distant
+
+    def diffuse_term(self) -> npt.NDArray[np.float64]:
+        """(P, R, R, 3) the paper's additive diffuse layer, (1 − F)·d."""
+        return (1.0 - self.fresnel[..., None].astype(np.float64)) * self.diffuse
+
+    def part_images(self) -> npt.NDArray[np.float64]:
+        """(P, R, R, 3) C_p = (1 − F)·d + F·(α_L·L + (1 − α_L)·D) per part."""
+        return self.diffuse_term() + self.fresnel[..., None] * self.incident()
+
+    def recombine(self) -> npt.NDArray[np.float64]:
+        """(R, R, 3) B + Σ_p c_p·C_p: the composite rebuilt from the layers (module docstring)."""
+        return self.background + np.einsum("pij,pijc->ijc", self.coverage, self.part_images())
+
+
+def camera_rays(camera: OrbitCamera, size: int, col, row):
+    """Camera rays through image points (col, row) of an R × R image (row 0 at the top).
+
+    Parameters
+    ----------
+    camera
+        Pinhole camera (``fov_y``, aspect 1).
+    size
+        R.
+    col, row
+        (k,) float image coordinates in pixels; a pixel's centre is at + 0.5.
+
+    Returns
+    -------
+    origins, directions : (k, 3) float64
+        The camera position, and unit directions.
+    """
+    col, row = np.asarray(col, dtype=np.float64), np.asarray(row, dtype=np.float64)
+    view = camera.view_matrix().astype(np.float64)
+    side, up, back = view[0, :3], view[1, :3], view[2, :3]
+    half = np.tan(np.radians(camera.fov_y) / 2.0)
+    x = (col / size * 2.0 - 1.0) * half
+    y = (1.0 - row / size * 2.0) * half
+    d = x[:, None] * side + y[:, None] * up - back
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return np.broadcast_to(camera.position, d.shape).astype(np.float64), d
+
+
+class SceneTracer:
+    """A scene's triangles in Embree, ready to trace views (GL-free).
+
+    Parameters
+    ----------
+    scene
+        Reflector nodes become parts (in order); local nodes are diffuse with their
+        ``color`` as albedo; the environment is the far field and, projected to SH9,
+        lights every diffuse term.
+    bounces
+        Traces after the first reflector hit before a path returns black.
+
+    Raises
+    ------
+    ValueError
+        A scene without a reflector.
+    """
+
+    def __init__(self, scene: Scene, bounces: int = TRACE_BOUNCES):
+        reflectors = scene.reflectors()
+        if not reflectors:
+            raise ValueError(f"scene {scene.name!r} has no reflector to bake")
+        self.part_names = [n.name for n in reflectors]
+        self.bounces = int(bounces)
+        self.environment = np.asarray(scene.environment.radiance, dtype=np.float32)
+        self.sh9 = project_latlong_sh9(self.environment)
+        self.kd = np.array([n.material.kd for n in reflectors], dtype=np.float64)
+        self.f0 = np.array([n.material.fresnel for n in reflectors], dtype=np.float64)
+        positions, normals, part, albedo = [], [], [], []
+        index = {id(n): i for i, n in enumerate(reflectors)}
+        for node in scene.nodes:
+            mesh, model = node.mesh, node.transform.matrix().astype(np.float64)
+            world = mesh.positions @ model[:3, :3].T + model[:3, 3]
+            nrm = mesh.normals @ normal_matrix(model).astype(np.float64).T
+            nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
+            positions.append(world[mesh.indices])
+            normals.append(nrm[mesh.indices])
+            m = mesh.triangle_count
+            part.append(np.full(m, index.get(id(node), -1), dtype=np.int64))
+            albedo.append(np.broadcast_to(np.asarray(node.color, dtype=np.float64), (m, 3)))
+        #: (m, 3, 3) float64 world-space triangle corners.
+        self.positions = np.concatenate(positions)
+        #: (m, 3, 3) float64 unit corner normals.
+        self.normals = np.concatenate(normals)
+        #: (m,) int64 reflector part of each triangle, −1 for local objects.
+        self.part = np.concatenate(part)
+        #: (P,) int64 index of each part's first triangle: a part's triangles are
+        #: contiguous, in the order of its node's mesh faces.
+        self.part_start = np.array(
+            [np.flatnonzero(self.part == p)[0] for p in range(len(reflectors))], dtype=np.int64
+        )
+        #: (m, 3) float64 albedo of local triangles.
+        self.albedo = np.concatenate(albedo)
+        extent = np.ptp(self.positions.reshape(-1, 3), axis=0)
+        self.ray_offset = float(1e-4 * np.linalg.norm(extent))
+        self._all = self._embree(np.arange(len(self.part)))
+        self._local_ids = np.flatnonzero(self.part < 0)
+        self._local = self._embree(self._local_ids) if len(self._local_ids) else None
+
+    def _embree(self, ids: npt.NDArray[np.int64]) -> rtcore_scene.EmbreeScene:
+        scene = rtcore_scene.EmbreeScene()
+        mesh_construction.TriangleMesh(scene, self.positions[ids].astype(np.float32))
+        return scene
+
+    # -- intersection and shading -------------------------------------------------------
+
+    def _intersect(self, local_only: bool, origins, directions):
+        """Closest hits: (n,) global triangle (−1 miss), t, u, v."""
+        n = len(origins)
+        if n == 0:
+            empty = np.zeros(0)
+            return np.zeros(0, dtype=np.int64), empty, empty, empty
+        scene = self._local if local_only else self._all
+        if scene is None:
+            return np.full(n, -1, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros(n)
+        res = scene.run(
+            np.ascontiguousarray(origins, dtype=np.float32),
+            np.ascontiguousarray(directions, dtype=np.float32),
+            output=1,
+        )
+        prim = res["primID"].astype(np.int64)
+        tri = np.where(prim >= 0, self._local_ids[np.maximum(prim, 0)] if local_only else prim, -1)
+        return (
+            tri,
+            res["tfar"].astype(np.float64),
+            res["u"].astype(np.float64),
+            res["v"].astype(np.float64),
+        )
+
+    def _shading_normal(self, tri, u, v, directions):
+        """(n, 3) interpolated unit normal at hits, turned to face against ``directions``."""
+        c = self.normals[tri]
+        n = (1.0 - u - v)[:, None] * c[:, 0] + u[:, None] * c[:, 1] + v[:, None] * c[:, 2]
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        flip = np.einsum("ij,ij->i", n, directions) > 0.0
+        n[flip] = -n[flip]
+        return n
+
+    def _diffuse_radiance(self, albedo, normals):
+        """(n, 3) albedo/π · max(E_sh9(n), 0)."""
+        return albedo / np.pi * np.maximum(irradiance_sh9(self.sh9, normals), 0.0)
+
+    def _reflector_terms(self, tri, t, u, v, origins, directions):
+        """Point, normal, mirror direction, Fresnel and diffuse term at reflector hits."""
+        p = origins + t[:, None] * directions
+        n = self._shading_normal(tri, u, v, directions)
+        r = directions - 2.0 * np.einsum("ij,ij->i", directions, n)[:, None] * n
+        part = self.part[tri]
+        fresnel = schlick(self.f0[part], np.einsum("ij,ij->i", r, n))
+        diffuse = self._diffuse_radiance(self.kd[part], n)
+        return p + n * self.ray_offset, n, r, fresnel, diffuse
+
+    def _shade(self, tri, t, u, v, origins, directions, depth):
+        """(n, 3) radiance of traced hits (module docstring); ``depth`` traces left."""
+        out = np.zeros((len(tri), 3))
+        miss = tri < 0
+        if miss.any():
+            out[miss] = sample_latlong(self.environment, directions[miss])
+        local = ~miss & (self.part[np.maximum(tri, 0)] < 0)
+        if local.any():
+            n = self._shading_normal(tri[local], u[local], v[local], directions[local])
+            out[local] = self._diffuse_radiance(self.albedo[tri[local]], n)
+        refl = ~miss & ~local
+        if refl.any():
+            o, d = origins[refl], directions[refl]
+            p, _, r, fresnel, diffuse = self._reflector_terms(
+                tri[refl], t[refl], u[refl], v[refl], o, d
+            )
+            out[refl] = (1.0 - fresnel)[:, None] * diffuse + fresnel[:, None] * self.radiance(
+                p, r, depth
+            )
+        return out
+
+    def radiance(self, origins, directions, depth: int | None = None):
+        """Radiance along rays through the whole scene.
+
+        Parameters
+        ----------
+        origins, directions
+            (n, 3) float, world space; directions need not be unit length.
+        depth
+            Traces allowed (default :attr:`bounces`); 0 returns black.
+
+        Returns
+        -------
+        (n, 3) float64
+        """
+        origins = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
+        directions = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        depth = self.bounces if depth is None else depth
+        if depth <= 0 or len(origins) == 0:
+            return np.zeros((len(origins), 3))
+        hit = self._intersect(False, origins, directions)
+        return self._shade(*hit, origins, directions, depth - 1)
+
+    # -- one view -----------------------------------------------------------------------
+
+    def primary_rays(self, camera: OrbitCamera, size: int, samples: int, seed: int = 0):
+        """Jittered camera rays.
+
+        Parameters
+        ----------
+        camera
+            Pinhole camera (its ``fov_y``; square images so aspect 1).
+        size
+            R, pixels per side.
+        samples
+            Rays per pixel: a jittered √s × √s grid when s is a square, uniform
+            jitter otherwise.
+        seed
+            Seed of the jitter.
+
+        Returns
+        -------
+        pixels : (R·R·s,) int64
+            Pixel index row·R + column of each ray (row 0 at the top).
+        origins : (R·R·s, 3) float64
+        directions : (R·R·s, 3) float64
+            Unit directions.
+        """
+        rng = np.random.default_rng(seed)
+        k = math.isqrt(samples)
+        pix = np.repeat(np.arange(size * size), samples)
+        if k * k == samples:
+            cell = np.tile(np.arange(samples), size * size)
+            jitter = np.stack([cell % k, cell // k], axis=1) + rng.random((len(pix), 2))
+            jitter /= k
+        else:
+            jitter = rng.random((len(pix), 2))
+        col, row = pix % size + jitter[:, 0], pix // size + jitter[:, 1]
+        return (pix, *camera_rays(camera, size, col, row))
+
+    def centre_rays(self, camera: OrbitCamera, size: int):
+        """One ray through each pixel centre (column + ½, row + ½), as the playback samples.
+
+        Returns
+        -------
+        pixels : (R·R,) int64
+            row·R + column.
+        origins, directions : (R·R, 3) float64
+            As :meth:`primary_rays`.
+        """
+        pix = np.arange(size * size)
+        return (pix, *camera_rays(camera, size, pix % size + 0.5, pix // size + 0.5))
+
+    def trace(self, camera: OrbitCamera, size: int = 256, samples: int = 4, seed: int = 0):
+        """Trace one view into its segmented layers.
+
+        Parameters
+        ----------
+        camera
+            The view.
+        size
+            R, pixels per side.
+        samples
+            Rays per pixel (≥ 1).
+        seed
+            Seed of the pixel jitter.
+
+        Returns
+        -------
+        TracedView
+        """
+        if size < 1 or samples < 1:
+            raise ValueError(f"size {size} and samples {samples} must be at least 1")
+        start = time.perf_counter()
+        pix, origins, dirs = self.primary_rays(camera, size, samples, seed)
+        tri, t, u, v = self._intersect(False, origins, dirs)
+        part = np.where(tri >= 0, self.part[np.maximum(tri, 0)], -1)
+        refl = part >= 0
+        radiance = np.zeros((len(pix), 3))
+        back = ~refl
+        radiance[back] = self._shade(
+            tri[back], t[back], u[back], v[back], origins[back], dirs[back], 0
+        )
+
+        # reflector samples: Figure 4's layers
+        ri = np.flatnonzero(refl)
+        p, nrm, r, fresnel, diffuse = self._reflector_terms(
+            tri[ri], t[ri], u[ri], v[ri], origins[ri], dirs[ri]
+        )
+        hit2 = self._intersect(False, p, r)
+        incident = self._shade(*hit2, p, r, self.bounces - 1)
+        is_local = (hit2[0] >= 0) & (self.part[np.maximum(hit2[0], 0)] >= 0)
+        distant = incident.copy()
+        if is_local.any():
+            li = np.flatnonzero(is_local)
+            hit3 = self._intersect(True, p[li], r[li])
+            distant[li] = self._shade(*hit3, p[li], r[li], 0)
+        radiance[ri] = (1.0 - fresnel)[:, None] * diffuse + fresnel[:, None] * incident
+
+        n_parts, npix = len(self.part_names), size * size
+        bins = part[ri] * npix + pix[ri]
+
+        def acc(weights):
+            w = np.asarray(weights, dtype=np.float64)
+            cols = w.reshape(len(ri), -1)
+            sums = [
+                np.bincount(bins, cols[:, c], minlength=n_parts * npix)
+                for c in range(cols.shape[1])
+            ]
+            out = np.stack(sums, axis=-1).reshape(n_parts, size, size, -1)
+            return out if w.ndim == 2 else out[..., 0]
+
+        count = acc(np.ones(len(ri)))
+        local_count = acc(is_local.astype(np.float64))
+        safe = np.maximum(count, 1.0)
+        local_safe = np.maximum(local_count, 1.0)[..., None]
+
+        def image(values):
+            return (
+                np.stack(
+                    [np.bincount(pix, values[:, c], minlength=npix) for c in range(3)], axis=-1
+                ).reshape(size, size, 3)
+                / samples
+            )
+
+        return TracedView(
+            camera=camera,
+            size=size,
+            samples=samples,
+            part_names=list(self.part_names),
+            composite=image(radiance).astype(np.float32),
+            background=image(np.where(refl[:, None], 0.0, radiance)).astype(np.float32),
+            coverage=(count / samples).astype(np.float32),
+            diffuse=(acc(diffuse) / safe[..., None]).astype(np.float32),
+            fresnel=(acc(fresnel) / safe).astype(np.float32),
+            distant=(acc(distant) / safe[..., None]).astype(np.float32),
+            local_rgb=(acc(incident * is_local[:, None]) / local_safe).astype(np.float32),
+            local_alpha=(local_count / safe).astype(np.float32),
+            seconds=time.perf_counter() - start,
+            ray_pixel=pix[ri],
+            ray_part=part[ri],
+            ray_point=p.astype(np.float32),
+            ray_normal=nrm.astype(np.float32),
+            ray_direction=r.astype(np.float32),
+        )
+
+
+def trace_view(
+    scene: Scene,
+    camera: OrbitCamera,
+    size: int = 256,
+    samples: int = 4,
+    seed: int = 0,
+    bounces: int = TRACE_BOUNCES,
+) -> TracedView:
+    """One view's segmented layers (builds a :class:`SceneTracer`; reuse one for many views)."""
+    return SceneTracer(scene, bounces).trace(camera, size, samples, seed)

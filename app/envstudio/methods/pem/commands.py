@@ -1,0 +1,180 @@
+"""``envstudio bake pem``: seed 003's per-view environment maps baked to a ``.pem`` file.
+
+Bad input (a view count below 1, a non-positive step, views that would coincide,
+a size out of range, an unknown scene, a scene without a reflector, a missing
+output folder, a ``--scheduler`` that does not answer) is refused with one line
+before any tracing. Views are baked on a local process pool or a Dask cluster and
+saved one by one to ``OUT.pem.parts/``; a rerun resumes from there, and
+``OUT.pem`` is written atomically only when every view is done (methods/pem/bake/bake.py).
+The last line gives the mean predicted-playback PSNR of each model
+(methods/pem/bake/models.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+import numpy as np
+from tqdm import tqdm
+
+from envstudio.errors import ParameterError
+from envstudio.io.atomic import check_output_path
+from envstudio.io.scene_file import resolve_scene
+from envstudio.methods.pem.bake import bake
+from envstudio.methods.pem.bake.bake import BakeReport, parts_folder
+from envstudio.methods.pem.bake.lookups import PLAYBACK
+from envstudio.methods.pem.bake.views import arc_views, grid_views
+from envstudio.methods.pem.lookups_gl import GlLookups
+from envstudio.plugin import Bake
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = ["BAKE", "DEFAULTS", "add_bake_arguments", "run_bake", "run_bake_pem"]
+
+#: Defaults of the bake's sizes (seed 003 §6: 100 views at 1°).
+DEFAULTS = {"views": 100, "step": 1.0, "size": 256, "samples": 4, "em_size": 64, "workers": None}
+
+
+def run_bake(*args, **kwargs) -> BakeReport:
+    """:func:`envstudio.methods.pem.bake.bake.run_bake` with the playback shader's GL lookups
+    (:class:`~envstudio.methods.pem.lookups_gl.GlLookups`) where a context can be made."""
+    return bake.run_bake(*args, gl_lookups=GlLookups, **kwargs)
+
+
+def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``envstudio bake pem``."""
+    parser.add_argument("--scene", help="shipped scene name (room) or a TOML scene file")
+    parser.add_argument("--env", help=argparse.SUPPRESS)  # refused: the scene's is baked
+    parser.add_argument("--size", type=int, help="trace resolution R (256)")
+    parser.add_argument("--views", type=int, help="views on the arc (100)")
+    parser.add_argument("--step", type=float, help="degrees between views (default 1)")
+    parser.add_argument("--samples", type=int, help="rays per pixel (4)")
+    parser.add_argument("--em-size", type=int, help="cube face edge of the EMs (default 64)")
+    parser.add_argument(
+        "--elevations",
+        type=int,
+        default=1,
+        help="rows of a 2D view grid, --elevation-step apart from the scene camera's (1: arc)",
+    )
+    parser.add_argument(
+        "--elevation-step", type=float, default=5.0, help="degrees between grid rows (5)"
+    )
+    parser.add_argument(
+        "--tie",
+        type=float,
+        help="weight μ of the coarse-to-fine MIP ties (default 1e-3; larger: coarse levels "
+        "nearer the decimated finest, steadier at small playback sizes, docs/pem)",
+    )
+    parser.add_argument(
+        "--lookups",
+        choices=("auto", "gl", "cpu"),
+        default="auto",
+        help="build A from the playback shader's own lookups on GL (auto: when a context "
+        "can be made) or from pixel-centre rays on the CPU",
+    )
+    parser.add_argument(
+        "--workers", type=int, help="local processes (default one per core; 0 in-process)"
+    )
+    cluster = parser.add_mutually_exclusive_group()
+    cluster.add_argument(
+        "--dask",
+        dest="scheduler",
+        action="store_const",
+        const="local",
+        help="bake on a local Dask cluster (2 worker processes) instead of the pool",
+    )
+    cluster.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="bake on the Dask scheduler at ADDRESS (tcp://host:8786), or 'local'",
+    )
+
+
+def _check(args: argparse.Namespace) -> None:
+    if args.env is not None:
+        raise ParameterError("bake pem: --env is not used (the scene's environment is baked)")
+    tie = getattr(args, "tie", None)
+    if tie is not None and not (math.isfinite(tie) and 0.0 <= tie <= 10.0):
+        raise ParameterError(f"--tie {tie:g}: expected a weight in [0, 10]")
+    if getattr(args, "elevations", 1) < 1:
+        raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
+    if args.views < 1:
+        raise ParameterError(f"--views {args.views}: expected a view count ≥ 1")
+    if not (math.isfinite(args.step) and args.step > 0):
+        raise ParameterError(f"--step {args.step:g}: expected a positive number of degrees")
+    if not 8 <= args.size <= 4096:
+        raise ParameterError(f"--size {args.size}: expected a trace resolution in [8, 4096]")
+    if not 1 <= args.samples <= 1024:
+        raise ParameterError(f"--samples {args.samples}: expected rays per pixel in [1, 1024]")
+    if not 2 <= args.em_size <= 1024:
+        raise ParameterError(f"--em-size {args.em_size}: expected a cube face edge in [2, 1024]")
+    if args.workers is not None and args.workers < 0:
+        raise ParameterError(f"--workers {args.workers}: expected 0 (in-process) or more")
+
+
+def run_bake_pem(args: argparse.Namespace) -> int:
+    """Check the arguments, bake with a progress bar, write the file, print one line."""
+    for name, value in DEFAULTS.items():
+        if getattr(args, name, None) is None:
+            setattr(args, name, value)
+    _check(args)
+    if args.scene is None:
+        raise ParameterError("bake pem: --scene is required (a shipped name or a TOML file)")
+    out = check_output_path(args.output)
+    resolve_scene(args.scene)
+    elevations = getattr(args, "elevations", 1)
+
+    def views(camera: OrbitCamera):
+        if elevations > 1:
+            return grid_views(camera, args.views, args.step, elevations, args.elevation_step)
+        return arc_views(camera, args.views, args.step)
+
+    try:
+        views(OrbitCamera())  # views that coincide, elevations past ±89°: before any work
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
+    with tqdm(unit="view", desc="pem", leave=False) as bar:
+        try:
+            report = run_bake(
+                args.scene,
+                views,
+                out,
+                size=args.size,
+                samples=args.samples,
+                em_size=args.em_size,
+                workers=args.workers,
+                bar=bar,
+                scheduler=getattr(args, "scheduler", None),
+                lookups=getattr(args, "lookups", "auto"),
+                tie=getattr(args, "tie", None),
+            )
+        except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
+            raise ParameterError(str(exc)) from None
+        except KeyboardInterrupt:
+            folder = parts_folder(out)
+            saved = len(list(folder.glob("view-*.npz"))) if folder.is_dir() else 0
+            bar.write(
+                f"envstudio: {out}: not written; {saved} of {args.views * elevations} views "
+                f"saved in "
+                f"{folder}/, the same command resumes",
+                file=sys.stderr,
+            )
+            raise
+    bake = report.bake
+    resumed = f", {len(report.reused)} resumed" if report.reused else ""
+    scores = ", ".join(f"{name} {np.nanmean(bake.playback_psnr[name]):.1f}" for name in PLAYBACK)
+    print(
+        f"{out}: {bake.views} views × {len(bake.parts)} parts, {bake.em_size}² EMs in "
+        f"{bake.levels} levels ({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s; "
+        f"playback PSNR {scores} dB"
+    )
+    return 0
+
+
+BAKE = Bake(
+    "pem",
+    "seed 003's per-view environment maps of a scene, ray traced and inferred, to FILE.pem",
+    run_bake_pem,
+    add_bake_arguments,
+)

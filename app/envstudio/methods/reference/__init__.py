@@ -1,0 +1,1 @@
+"""Method ``reference``: the ground truth (method), its sample allocation and tracing, plugin."""

@@ -1,0 +1,66 @@
+"""The public API for environment-map methods, envmap-studio's own and other packages'.
+
+A method is a :class:`Method` subclass that declares its :class:`Parameter` s and
+draws the scene's reflectors each frame from :class:`FrameInputs`. A package
+makes it appear in the viewer, ``--param``, ``bench``, ``compare`` and
+``envstudio methods`` by naming it, or a :class:`Plugin` that bundles it with
+its subcommands, figures, bakes and bench tables, as an entry point of the
+group ``envstudio.methods``::
+
+    [project.entry-points."envstudio.methods"]
+    flat = "envstudio_flat:PLUGIN"
+
+Shaders load by name through the method's ``self.programs.get("<folder>/<file>")``:
+``Plugin.shaders`` adds the plugin's folder, whose files ``#include`` each
+other and the shipped ``common/`` files by the same names. Time each pass with
+``frame.timer.measure("label")``. envmap-studio's methods use exactly this
+module and register the same way (its ``pyproject.toml``); the walk-through is
+``docs/plugins.md``. Nothing else in the package is public.
+"""
+
+from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.errors import InputFileError, ParameterError, UserError
+from envstudio.gpu.programs import ShaderCompileError, read_shader
+from envstudio.gpu.timers import PassTimer
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.io.images import write_image
+from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
+from envstudio.render.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
+from envstudio.render.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
+from envstudio.render.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
+from envstudio.render.images import tile, to_ldr, upright
+from envstudio.render.method import Method, ReportExtra
+from envstudio.render.protocols import Session
+
+__all__ = [
+    "EQ8_PARAMETERS",
+    "Bake",
+    "BenchTable",
+    "Command",
+    "ConvergenceStatus",
+    "Figure",
+    "FigureRequest",
+    "FrameInputs",
+    "GpuNode",
+    "GpuScene",
+    "GroundTruth",
+    "InputFileError",
+    "Method",
+    "Parameter",
+    "ParameterError",
+    "ParameterValues",
+    "PassTimer",
+    "Plugin",
+    "ReportExtra",
+    "Session",
+    "ShaderCompileError",
+    "StaticEnvironment",
+    "UserError",
+    "read_shader",
+    "set_eq8_uniforms",
+    "set_uniform",
+    "tile",
+    "to_ldr",
+    "upright",
+    "write_image",
+]

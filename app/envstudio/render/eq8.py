@@ -1,0 +1,39 @@
+"""Seed 000 eq. 8's shading as several methods share it: Schlick Fresnel over a diffuse term.
+
+L_o = (1 − F) · k_d · L_blur(n) + F · L_glossy(r), F Schlick's of f_λ (seed 000
+§5.2, eq. 8); shaders/common/eq8.glsl evaluates it. ``mirror``, ``hwconv`` and
+``banks`` declare :data:`EQ8_PARAMETERS` and set the uniforms with
+:func:`set_eq8_uniforms`; only L_glossy is their own.
+"""
+
+from __future__ import annotations
+
+from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.render.gpu_scene import FrameInputs
+
+#: f_λ and k_d of eq. 8.
+EQ8_PARAMETERS = (
+    Parameter(
+        "fresnel",
+        "float",
+        1.0,
+        0.0,
+        1.0,
+        "f_λ",
+        "Schlick reflectance at normal incidence (1 = perfect mirror).",
+    ),
+    Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo of the (1 − F) term."),
+)
+
+
+def set_eq8_uniforms(program, frame: FrameInputs, values: ParameterValues) -> None:
+    """The uniforms of common/eq8.glsl's shading: camera, f_λ, k_d, the diffuse mip level.
+
+    For every method that declares mirror's ``fresnel`` and ``kd``; the diffuse
+    term reads the cube map's 2 × 2-per-face level along the normal.
+    """
+    set_uniform(program, "u_camera_position", frame.camera_position)
+    set_uniform(program, "u_fresnel", float(values["fresnel"]))
+    set_uniform(program, "u_kd", float(values["kd"]))
+    set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)

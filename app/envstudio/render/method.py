@@ -1,0 +1,162 @@
+"""The renderer contract (DESIGN.md): a method, its declared parameters, its report sections.
+
+A method draws the scene's reflectors into the bound HDR framebuffer (linear
+radiance). It owns its GPU resources, prepares lazily (what depends on the
+environment is rebuilt only when :attr:`GpuScene.environment_revision`
+changes), times each pass with the frame's :class:`PassTimer`, and sets its
+parameters as uniforms: a parameter change never recompiles unless the
+parameter is declared ``rebuild=True``. An environment-map method looks the
+environment up in ``frame.scene.static_environment()`` (seed 003's static EM:
+the local objects drawn over the far field), not in ``GpuScene.cube``, and keys
+what it derives from it on that object's ``revision``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
+
+import moderngl
+
+from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.render.gpu_scene import FrameInputs, GpuScene
+
+if TYPE_CHECKING:  # the protocol of what a hook may use of a session (no import at run time)
+    from envstudio.render.protocols import Session
+    from envstudio.scene.camera import OrbitCamera
+
+
+@dataclass
+class ReportExtra:
+    """A section a method adds to ``envstudio compare``'s report (:meth:`Method.report_extras`).
+
+    Attributes
+    ----------
+    title : str
+        The section's heading.
+    text : str
+        A sentence or two above the table (plain text).
+    columns : list of str
+        The table's header (empty: no table).
+    rows : list of list of str
+        The table's cells, formatted.
+    data : dict
+        JSON-ready numbers behind the table, as compare.json gives them.
+    images : list of (str, str)
+        (file name in the report's folder, caption) of images the method wrote there.
+    """
+
+    title: str
+    text: str
+    columns: list[str] = field(default_factory=list)
+    rows: list[list[str]] = field(default_factory=list)
+    data: dict = field(default_factory=dict)
+    images: list[tuple[str, str]] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        """JSON-ready: the title, text, table, data and image files."""
+        return {
+            "title": self.title,
+            "text": self.text,
+            "columns": list(self.columns),
+            "rows": [list(row) for row in self.rows],
+            "data": self.data,
+            "images": [{"file": f, "caption": c} for f, c in self.images],
+        }
+
+
+class Method(ABC):
+    """Base class of every renderer.
+
+    Subclasses set :attr:`name`, :attr:`title`, :attr:`summary`, declare
+    :attr:`parameters`, and implement :meth:`render`.
+
+    Parameters
+    ----------
+    ctx
+        Context the method renders with.
+    programs
+        Shared program cache of that context.
+    """
+
+    name: ClassVar[str]
+    title: ClassVar[str]
+    summary: ClassVar[str]
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
+    #: The image builds up over frames (a frame is one batch of an accumulation).
+    progressive: ClassVar[bool] = False
+    #: Title of a collapsing section of the Method panel showing :meth:`panel_images`
+    #: ("" for none).
+    panel_figure: ClassVar[str] = ""
+
+    def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary):
+        self.ctx = ctx
+        self.programs = programs
+        self.values = ParameterValues(self.parameters)
+        #: Work a progressive method may do per frame, in ms (None: a whole batch per
+        #: frame, as headless commands want; the window sets a budget to stay responsive).
+        self.frame_budget_ms: float | None = None
+
+    @abstractmethod
+    def render(self, frame: FrameInputs) -> None:
+        """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
+
+    def prepare(self, scene: GpuScene) -> None:  # noqa: B027  (optional hook)
+        """Load what the method needs before its first frame on ``scene`` (files, bakes).
+
+        The viewer calls it when the method is picked and keeps the previous
+        method on a :class:`~envstudio.errors.UserError`; :meth:`render` calls it
+        too. Most methods need nothing.
+        """
+
+    def steer_camera(self, camera: OrbitCamera) -> None:  # noqa: B027  (optional hook)
+        """Move the camera before a frame (``pem`` snaps it to its baked path); most do not."""
+
+    def bench_notes(self) -> dict:
+        """What ``envstudio bench`` reports beside this method's times (JSON-ready; none)."""
+        return {}
+
+    def finished(self) -> bool:
+        """True when another frame would not change the image (progressive methods: converged)."""
+        return True
+
+    def status_line(self) -> str:
+        """One line of progress for the UI and the CLI (empty for one-shot methods)."""
+        return ""
+
+    def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
+        """Labelled 8-bit images for the panel's :attr:`panel_figure` section (row 0 on top).
+
+        Called only while that section is open, after the frame was drawn; ``exposure``
+        and ``tonemap`` are the display's settings.
+        """
+        return []
+
+    def progress(self) -> float | None:
+        """Fraction done of background work the UI shows as a progress bar (None: none)."""
+        return None
+
+    def report_extras(self, session: Session, out_dir: Path) -> list[ReportExtra]:
+        """Sections ``envstudio compare`` adds to its report for this method (none by default).
+
+        Called once after the comparison was measured (its frames, metrics and
+        parameters are kept: the method may change its values), with the session
+        and the report's folder (made), where any image of a section is written.
+        """
+        return []
+
+    def release(self) -> None:  # noqa: B027  (optional hook: most methods own nothing extra)
+        """Free GPU resources the method owns; safe to call twice."""
+
+    @classmethod
+    def describe(cls) -> dict:
+        """JSON-ready description: name, title, summary, parameters."""
+        return {
+            "name": cls.name,
+            "title": cls.title,
+            "summary": cls.summary,
+            "parameters": [p.describe() for p in cls.parameters],
+        }
