@@ -15,6 +15,7 @@ import numpy as np
 from tqdm import tqdm
 
 from envstudio.gpu.context import describe
+from envstudio.render.registry import available_methods
 from envstudio.render.session import RenderSession
 
 
@@ -82,10 +83,11 @@ def run_bench(
         if notes:
             report["methods"][name]["notes"] = notes
     bar.close()
-    if "mirror" in report["methods"]:
-        mirror = report["methods"]["mirror"]["frame"]["median_ms"]
+    baseline = next(iter(available_methods()))  # the first in the switch: mirror
+    if baseline in report["methods"]:
+        reference_ms = report["methods"][baseline]["frame"]["median_ms"]
         for entry in report["methods"].values():
-            entry["frame"]["ratio_to_mirror"] = entry["frame"]["median_ms"] / mirror
+            entry["frame"][f"ratio_to_{baseline}"] = entry["frame"]["median_ms"] / reference_ms
     return report
 
 
@@ -99,8 +101,14 @@ def format_report(report: dict) -> str:
     ]
     for name, entry in report["methods"].items():
         passes = "  ".join(f"{k}={v['median_ms']:.3f}" for k, v in entry["passes"].items())
-        ratio = entry["frame"].get("ratio_to_mirror")
-        ratio = f"  ({ratio:.2f}x mirror)" if ratio is not None else ""
+        ratio = next(
+            (
+                f"  ({v:.2f}x {k[len('ratio_to_') :]})"
+                for k, v in entry["frame"].items()
+                if k.startswith("ratio_to_")
+            ),
+            "",
+        )
         lines.append(
             f"{name:<12} {entry['frame']['median_ms']:>10.3f} "
             f"{entry['frame']['p95_ms']:>10.3f}  {passes}{ratio}"

@@ -516,7 +516,7 @@ def _converge(
     checkpoint = ground_truth_cache.Checkpoint(session, reference, size) if cache else None
     with (
         tqdm(
-            desc="reference",
+            desc=reference.name,
             unit="frame",
             file=sys.stderr,
             disable=not progress,

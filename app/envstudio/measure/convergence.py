@@ -65,7 +65,7 @@ def run_convergence(
     start = time.perf_counter()
     with (
         tqdm(
-            desc="reference",
+            desc=method.name,
             unit="frame",
             file=sys.stderr,
             disable=not progress,

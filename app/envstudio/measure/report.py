@@ -46,6 +46,7 @@ from envstudio.io.images import write_image
 from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
 from envstudio.render.method import ReportExtra
+from envstudio.render.registry import ground_truth_class
 from envstudio.render.split_view import SplitSettings
 
 HEAT_SCALE = SplitSettings().heat_scale
@@ -82,7 +83,7 @@ def write_report(comparison: Comparison, folder: str | os.PathLike) -> list[Path
     ]
     for result in comparison.results:
         files = _files(result.name)
-        if result.name != "reference":
+        if result.name != ground_truth_class().name:
             written.append(write_image(folder / files["exr"], result.hdr))
             written.append(write_image(folder / files["png"], result.display))
         context = CONTEXT_BRIGHTNESS * (reference.display @ LUMINANCE)

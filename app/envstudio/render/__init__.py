@@ -1,1 +1,2 @@
-"""Frame composition shared by the window, headless render and benchmark."""
+"""The generic engine: the method contract, the GPU scene, frame, session and display, the
+registry of plugins and the hook types. It knows methods only through the registry."""
