@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -82,7 +83,9 @@ def _broken_plugins(folder: Path) -> Path:
 def plugin_site(tmp_path_factory) -> Path:
     """examples/plugin-flat and the broken distribution, installed into one target folder."""
     target = tmp_path_factory.mktemp("site")
-    _pip_install(ROOT / "examples" / "plugin-flat", target)
+    example = tmp_path_factory.mktemp("example") / "plugin-flat"  # its build/ stays out of the tree
+    shutil.copytree(ROOT / "examples" / "plugin-flat", example)
+    _pip_install(example, target)
     _pip_install(_broken_plugins(tmp_path_factory.mktemp("broken")), target)
     return target
 

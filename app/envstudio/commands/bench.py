@@ -101,6 +101,16 @@ def _json_out(args: argparse.Namespace):
     return check_output_path(args.json_out) if args.json_out else None
 
 
+def _report(text: str, report: dict, json_out) -> int:
+    """Print the table and write the JSON where asked; the exit status."""
+    from envstudio.io.atomic import write_text_atomic
+
+    print(text)
+    if json_out:
+        write_text_atomic(json_out, json.dumps(report, indent=2))
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Dispatch to the table asked for, else time the methods."""
     from envstudio.io.scene_setup import parse_size
@@ -138,7 +148,6 @@ def _run_table(args: argparse.Namespace, size: tuple[int, int], owner: str, tabl
 
 def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
     """Median and p95 time per frame and per pass of each method."""
-    from envstudio.io.atomic import write_text_atomic
     from envstudio.io.scene_setup import build_scene, subdivide_reflectors
     from envstudio.measure.bench import format_report
     from envstudio.measure.bench import run_bench as bench
@@ -166,15 +175,11 @@ def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
         report = bench(session, names, size, args.frames, args.warmup, progress=sys.stderr.isatty())
     finally:
         session.release()
-    print(format_report(report))
-    if json_out:
-        write_text_atomic(json_out, json.dumps(report, indent=2))
-    return 0
+    return _report(format_report(report), report, json_out)
 
 
 def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
     """``--converge``: the ground truth's time to its tolerance."""
-    from envstudio.io.atomic import write_text_atomic
     from envstudio.measure.convergence import format_convergence, run_convergence
     from envstudio.render.registry import ground_truth_class
 
@@ -198,10 +203,7 @@ def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
         )
     finally:
         session.release()
-    print(format_convergence(report))
-    if json_out:
-        write_text_atomic(json_out, json.dumps(report, indent=2))
-    return 0
+    return _report(format_convergence(report), report, json_out)
 
 
 COMMAND = Command("bench", "time every method per frame and per pass", run, add_arguments)
