@@ -92,3 +92,44 @@ def test_the_key_leaves_out_only_when_to_stop_and_how_batches_are_drawn(gl_ctx):
         assert ground_truth_cache.cache_path(session, reference, (32, 32)) != base, name
         reference.values[name] = default
     session.release()
+
+
+def _flip_a_byte(path):
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0x40
+    path.write_bytes(bytes(data))
+
+
+def _checksummed_elsewhere(path):
+    """A valid archive whose arrays were changed after its checksum was taken."""
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays["sum"] = arrays["sum"] + 1.0
+    with open(path, "wb") as handle:
+        np.savez(handle, **arrays)
+
+
+@pytest.mark.parametrize(
+    "corrupt",
+    [
+        pytest.param(lambda p: p.write_bytes(p.read_bytes()[: len(p.read_bytes()) // 2]), id="cut"),
+        pytest.param(_flip_a_byte, id="bit-flip"),
+        pytest.param(_checksummed_elsewhere, id="edited"),
+        pytest.param(lambda p: p.write_bytes(b""), id="empty"),
+        pytest.param(lambda p: (p.unlink(), p.mkdir()), id="folder"),
+    ],
+)
+def test_a_saved_state_that_does_not_load_is_one_note_and_discarded(tmp_path, capsys, corrupt):
+    path = tmp_path / "reference" / "key.npz"
+    state = {"sum": np.arange(48, dtype=np.float32).reshape(4, 3, 4), "batches": np.int64(3)}
+    save_state(path, state)
+    loaded = load_state(path)
+    assert set(loaded) == set(state) and np.array_equal(loaded["sum"], state["sum"])
+    corrupt(path)
+    capsys.readouterr()
+    assert load_state(path) is None
+    notes = capsys.readouterr().err.splitlines()
+    assert len(notes) == 1 and notes[0].startswith(f"envstudio: note: {path}: unreadable")
+    assert not path.exists()  # discarded: the next save writes a fresh one
+    save_state(path, state)
+    assert np.array_equal(load_state(path)["sum"], state["sum"])

@@ -124,3 +124,49 @@ def test_subdivide_refines_a_mesh_towards_its_smooth_surface(tmp_path):
         path.write_text(MESH_SCENE.format(subdivide=bad))
         with pytest.raises(InputFileError, match=r"object\[0\]\.subdivide = .*0\.\.4"):
             load_scene(path)
+
+
+SCENE_TOP = """{top}
+[environment]
+file = {file}
+[camera]
+{camera}
+[[object]]
+primitive = "sphere"
+{object}
+"""
+
+
+@pytest.mark.parametrize(
+    ("parts", "fragments"),
+    [
+        ({"file": "5"}, ["environment.file = 5", "expected a string"]),
+        ({"camera": "zoom = 2.0"}, ["camera.zoom: unknown key", "azimuth, elevation"]),
+        ({"camera": "distanse = 2.0"}, ["camera.distanse: unknown key", "did you mean 'distance'"]),
+        ({"top": 'nmae = "x"'}, ["nmae: unknown key", "did you mean 'name'"]),
+        ({"object": "scael = 2.0"}, ["object[0].scael: unknown key", "did you mean 'scale'"]),
+        ({"camera": "fov = 180.0"}, ["camera.fov = 180.0", "in (0, 180)"]),
+        ({"camera": "fov = 0"}, ["camera.fov = 0", "in (0, 180)"]),
+        ({"camera": "distance = 0"}, ["camera.distance = 0", "> 0"]),
+        ({"camera": "distance = inf"}, ["camera.distance = inf", "> 0"]),
+        ({"camera": "azimuth = nan"}, ["camera.azimuth = nan", "finite"]),
+        ({"camera": "target = [0, nan, 0]"}, ["camera.target[1] = nan", "finite"]),
+        ({"object": "scale = 0"}, ["object[0].scale = 0", "> 0"]),
+        ({"object": "fit = -1.0"}, ["object[0].fit = -1.0", "> 0"]),
+        ({"object": "size = 0"}, ["object[0].size = 0", "> 0"]),
+        ({"object": "translation = [1, 2]"}, ["object[0].translation = [1, 2]", "[x, y, z]"]),
+        ({"object": "role = 7"}, ["object[0].role = 7", "reflector, local"]),
+    ],
+)
+def test_scene_files_are_checked_against_the_schema(tmp_path, parts, fragments):
+    """Wrong types, values out of range, NaN and Inf, unknown keys (with a suggestion):
+    one line naming the file and the key path, before anything is loaded."""
+    fields = {"top": "", "file": '"hdr/studio.exr"', "camera": "", "object": ""} | parts
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE_TOP.format(**fields))
+    with pytest.raises(InputFileError) as info:
+        load_scene(path)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith(f"{path}: ")
+    for fragment in fragments:
+        assert fragment in message, message

@@ -17,6 +17,10 @@ class InputFileError(UserError):
     """A file is missing, unreadable or not what was expected."""
 
 
+class OutputFileError(UserError):
+    """A file cannot be written: a folder given as a file, a read-only folder, a full disk."""
+
+
 class ParameterError(UserError):
     """An unknown method or parameter, or a value out of range."""
 

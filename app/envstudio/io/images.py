@@ -6,6 +6,7 @@ linear float32 RGB unless a function says otherwise.
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
 
@@ -103,6 +104,9 @@ def write_image(path: str | os.PathLike, pixels: npt.ArrayLike) -> Path:
     ------
     InputFileError
         If the folder does not exist or the suffix is not an image format.
+    OutputFileError
+        If the file cannot be written whole (a full disk, a read-only folder);
+        an existing file of that name is then left as it was.
     """
     path = check_output_path(path)
     suffix = path.suffix.lower()
@@ -123,14 +127,28 @@ def write_image(path: str | os.PathLike, pixels: npt.ArrayLike) -> Path:
     spec = oiio.ImageSpec(w, h, c, fmt)
     if suffix == ".exr":
         spec.attribute("compression", "zip")
-    with atomic_path(path) as tmp:
+    with atomic_path(path, need=data.nbytes) as tmp:
         out = oiio.ImageOutput.create(str(tmp))
         if out is None or not out.open(str(tmp), spec):
-            raise InputFileError(f"{path}: cannot write ({oiio.geterror().strip()})")
-        try:
-            ok = out.write_image(data)
-        finally:
-            out.close()
-        if not ok:
-            raise InputFileError(f"{path}: cannot write ({out.geterror().strip()})")
+            raise OSError(errno.EIO, f"cannot write: {oiio.geterror().strip()}")
+        ok = out.write_image(data)
+        ok = out.close() and ok
+        if not ok or not _complete(tmp, spec):
+            raise OSError(errno.EIO, f"cannot write: {out.geterror().strip() or 'incomplete'}")
     return path
+
+
+def _complete(path: Path, spec) -> bool:
+    """Whether the image file at ``path`` reads back whole with ``spec``'s size."""
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        oiio.geterror()  # taken, so OpenImageIO does not print it at exit
+        return False
+    try:
+        shape = (inp.spec().width, inp.spec().height, inp.spec().nchannels)
+        pixels = inp.read_image()
+        if pixels is None:
+            inp.geterror()
+    finally:
+        inp.close()
+    return pixels is not None and shape == (spec.width, spec.height, spec.nchannels)

@@ -29,14 +29,23 @@ Example::
     tangent_field = "axis"           # axis | direction | radial | uv (scene/tangents.py)
     tangent_axis = "y"               # x | y | z: the axis (axis, radial) or direction
     model = "banks"                  # optional: the reference's BRDF (phong | microfacet | banks)
+
+The file is checked against :class:`SceneSpec` (msgspec) before anything is
+loaded: a key of the wrong type, a value out of range (fov outside (0, 180), a
+distance, scale, fit or size ≤ 0, NaN or Inf anywhere) or an unknown key (with a
+"did you mean") is one line naming the file, the key path and what was expected.
 """
 
 from __future__ import annotations
 
+import difflib
 import os
+import re
+import typing
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Literal
 
+import msgspec
 import tomllib
 
 from envstudio.errors import InputFileError
@@ -55,6 +64,77 @@ from envstudio.scene.tangents import AXES, FIELDS, TangentField
 MODELS = ("phong", "microfacet", "banks")
 #: The largest Banks sharpness the methods accept (their ``sharpness`` parameter).
 SHARPNESS_MAX = 0.9999
+_LIMIT = 1e30  # coordinates past this are out of range (and NaN and Inf are refused)
+
+Finite = Annotated[float, msgspec.Meta(ge=-_LIMIT, le=_LIMIT)]
+Positive = Annotated[float, msgspec.Meta(gt=0.0, le=_LIMIT)]
+Unit = Annotated[float, msgspec.Meta(ge=0.0, le=1.0)]
+Vector = tuple[Finite, Finite, Finite]
+Colour = tuple[Unit, Unit, Unit]
+# kd's union names its three components as a list: msgspec 0.23 crashes at exit with a
+# union of an Annotated float and a tuple of them.
+ColourList = Annotated[list[Unit], msgspec.Meta(min_length=3, max_length=3)]
+Sharpness = Annotated[
+    float,
+    msgspec.Meta(
+        ge=0.0, le=SHARPNESS_MAX, description=f"a number in [0, 1) (at most {SHARPNESS_MAX})"
+    ),
+]
+
+
+class EnvironmentSpec(msgspec.Struct, forbid_unknown_fields=True):
+    """``[environment]``: the lat-long map, relative to the scene file, then to assets/."""
+
+    file: str
+
+
+class CameraSpec(msgspec.Struct, forbid_unknown_fields=True):
+    """``[camera]``: orbit angles in degrees, distance in scene units, vertical fov."""
+
+    azimuth: Finite = 0.0
+    elevation: Finite = 0.0
+    distance: Positive = 3.0
+    target: Vector = (0.0, 0.0, 0.0)
+    fov: Annotated[float, msgspec.Meta(gt=0.0, lt=180.0)] = 45.0
+
+
+class MaterialSpec(msgspec.Struct, forbid_unknown_fields=True):
+    """``[object.material]``: eq. 8's k_d and f_λ, Phong N, Banks keys, the reference's model."""
+
+    kd: Unit | ColourList = 0.0
+    fresnel: Unit = 1.0
+    phong_exponent: Positive = 200.0
+    sharpness: Sharpness = 0.9
+    tangent_field: Literal[FIELDS] = "axis"  # type: ignore[valid-type]
+    tangent_axis: Literal[tuple(AXES)] = "y"  # type: ignore[valid-type]
+    model: Literal[MODELS] | None = None  # type: ignore[valid-type]
+
+
+class ObjectSpec(msgspec.Struct, forbid_unknown_fields=True):
+    """``[[object]]``: a mesh file or a primitive, its role, placement and material."""
+
+    name: str | None = None
+    mesh: str | None = None
+    primitive: Literal["sphere", "box", "room"] | None = None
+    size: Positive = 1.0
+    role: Literal["reflector", "local"] = "reflector"
+    fit: Positive | None = None
+    translation: Vector = (0.0, 0.0, 0.0)
+    rotation: Vector = (0.0, 0.0, 0.0)
+    scale: Positive = 1.0
+    components: list[Annotated[int, msgspec.Meta(ge=0)]] | None = None
+    subdivide: Annotated[int, msgspec.Meta(ge=0, le=4)] = 0
+    color: Colour = (0.8, 0.8, 0.8)
+    material: MaterialSpec = msgspec.field(default_factory=MaterialSpec)
+
+
+class SceneSpec(msgspec.Struct, forbid_unknown_fields=True):
+    """A scene file's top level."""
+
+    environment: EnvironmentSpec
+    object: Annotated[list[ObjectSpec], msgspec.Meta(min_length=1)]
+    name: str | None = None
+    camera: CameraSpec = msgspec.field(default_factory=CameraSpec)
 
 
 def shipped_scenes() -> dict[str, Path]:
@@ -91,33 +171,129 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     Raises
     ------
     InputFileError
-        Unreadable TOML, a missing key or a bad value, naming the file and key.
+        Unreadable TOML, or a key missing, unknown, of the wrong type or out of
+        range (:class:`SceneSpec`), naming the file and the key path.
     """
     path = resolve_scene(name_or_path)
+    spec = read_scene_spec(path)
+    reader = _SceneReader(path)
+    env_file = reader.find(spec.environment.file)
+    environment = Environment(read_environment(env_file), env_file)
+    nodes = [reader.node(i, obj) for i, obj in enumerate(spec.object)]
+    cam = spec.camera
+    camera = OrbitCamera(
+        azimuth=cam.azimuth,
+        elevation=cam.elevation,
+        distance=cam.distance,
+        target=cam.target,
+        fov_y=cam.fov,
+    )
+    return Scene(environment, nodes, camera, spec.name or path.stem)
+
+
+def read_scene_spec(path: Path) -> SceneSpec:
+    """The scene file at ``path``, parsed and checked against :class:`SceneSpec`."""
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(f"{path}: not a valid TOML scene ({exc})") from None
-    reader = _SceneReader(path)
-    env_spec = data.get("environment", {})
-    if "file" not in env_spec:
-        raise InputFileError(f'{path}: [environment] needs file = "..."')
-    environment = Environment(
-        read_environment(reader.find(env_spec["file"])), reader.find(env_spec["file"])
-    )
-    objects = data.get("object", [])
-    if not objects:
-        raise InputFileError(f"{path}: no [[object]] entries, expected at least one")
-    nodes = [reader.node(i, spec) for i, spec in enumerate(objects)]
-    cam = data.get("camera", {})
-    camera = OrbitCamera(
-        azimuth=reader.number(cam, "azimuth", 0.0, "camera"),
-        elevation=reader.number(cam, "elevation", 0.0, "camera"),
-        distance=reader.number(cam, "distance", 3.0, "camera"),
-        target=reader.vector(cam, "target", (0.0, 0.0, 0.0), "camera"),
-        fov_y=reader.number(cam, "fov", 45.0, "camera"),
-    )
-    return Scene(environment, nodes, camera, data.get("name", path.stem))
+    try:
+        return msgspec.convert(data, SceneSpec)
+    except msgspec.ValidationError as exc:
+        raise InputFileError(f"{path}: {_explain(str(exc), data)}") from None
+
+
+_AT = re.compile(r"^(?P<what>.*?)(?: - at `\$(?P<where>[^`]*)`)?$")
+_STEP = re.compile(r"\.(\w+)|\[(\d+)\]")
+
+
+def _explain(message: str, data: dict) -> str:
+    """msgspec's ``message`` as ``key.path = value, expected ...`` (or "did you mean")."""
+    match = _AT.match(message)
+    steps = [name or int(index) for name, index in _STEP.findall(match["where"] or "")]
+    where = "".join(f"[{s}]" if isinstance(s, int) else f".{s}" for s in steps).lstrip(".")
+    what = match["what"]
+    unknown = re.match(r"Object contains unknown field `(\w+)`", what)
+    if unknown:
+        key = unknown[1]
+        fields = _type_at(SceneSpec, steps).__struct_fields__
+        close = difflib.get_close_matches(key, fields, n=1)
+        hint = f"did you mean {close[0]!r}?" if close else f"expected one of {', '.join(fields)}"
+        return f"{where + '.' if where else ''}{key}: unknown key, {hint}"
+    missing = re.match(r"Object missing required field `(\w+)`", what)
+    if missing:
+        return f"{where + '.' if where else ''}{missing[1]} is missing"
+    value = _value_at(data, steps)
+    return f"{where} = {value!r}, expected {_describe(_type_at(SceneSpec, steps), what)}"
+
+
+def _value_at(data, steps: list) -> object:
+    for step in steps:
+        data = data[step]
+    return data
+
+
+def _type_at(tp, steps: list):
+    """The declared type at ``steps`` below ``tp`` (struct fields, list and tuple items)."""
+    for step in steps:
+        tp = _plain(tp)
+        if isinstance(step, str):
+            tp = typing.get_type_hints(tp, include_extras=True)[step]
+        else:
+            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            tp = args[step] if typing.get_origin(tp) is tuple else args[0]
+    return tp
+
+
+def _plain(tp):
+    """``tp`` without Annotated and without None in a union."""
+    if typing.get_origin(tp) is Annotated:
+        tp = typing.get_args(tp)[0]
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if type(None) in typing.get_args(tp) and len(args) == 1:
+        return _plain(args[0])
+    return tp
+
+
+def _describe(tp, fallback: str) -> str:
+    """What a value of the declared type ``tp`` must be, in words."""
+    args = typing.get_args(tp)
+    if type(None) in args and len(args) == 2:  # optional: what it is when given
+        return _describe(next(a for a in args if a is not type(None)), fallback)
+    annotated = typing.get_origin(tp) is Annotated
+    meta = [m for m in args[1:] if isinstance(m, msgspec.Meta)] if annotated else []
+    if meta and meta[0].description:
+        return meta[0].description
+    base = _plain(tp)
+    if typing.get_origin(base) is Literal:
+        return "one of " + ", ".join(map(str, typing.get_args(base)))
+    if typing.get_origin(base) in (tuple, list):
+        return "[x, y, z] (three numbers" + _bounds(typing.get_args(base)[0]) + ")"
+    if base is int and meta and meta[0].le is not None:
+        return f"a whole number in {meta[0].ge}..{meta[0].le}"
+    if base in (float, int):
+        return ("a whole number" if base is int else "a number") + _bounds(tp)
+    if base is str:
+        return "a string"
+    if typing.get_args(base):
+        return " or ".join(_describe(a, fallback) for a in typing.get_args(base))
+    return fallback.replace("Expected ", "").replace("`", "")
+
+
+def _bounds(tp) -> str:
+    """`` in [a, b]``, `` > 0`` and the like, from an Annotated number's Meta."""
+    meta = next((m for m in typing.get_args(tp)[1:] if isinstance(m, msgspec.Meta)), None)
+    if meta is None:
+        return ""
+    low = (meta.ge, "[") if meta.ge is not None else (meta.gt, "(")
+    high = (meta.le, "]") if meta.le is not None else (meta.lt, ")")
+    if high[0] is not None and abs(high[0]) >= _LIMIT:
+        if low[0] is not None and abs(low[0]) >= _LIMIT:
+            return ", finite"
+        return f" {'>=' if low[1] == '[' else '>'} {low[0]:g}"
+    if low[0] is None:
+        return f" {'<=' if high[1] == ']' else '<'} {high[0]:g}"
+    return f" in {low[1]}{low[0]:g}, {high[0]:g}{high[1]}"
 
 
 def scene_from_files(env_path: str | os.PathLike, mesh_path: str | os.PathLike | None) -> Scene:
@@ -133,6 +309,8 @@ def scene_from_files(env_path: str | os.PathLike, mesh_path: str | os.PathLike |
 
 
 class _SceneReader:
+    """Builds nodes from a checked :class:`SceneSpec`, finding files beside the scene."""
+
     def __init__(self, path: Path):
         self.path = path
 
@@ -143,91 +321,35 @@ class _SceneReader:
                 return candidate
         raise InputFileError(f"{self.path}: referenced file {name!r} not found")
 
-    def number(self, spec: dict, key: str, default: float, where: str) -> float:
-        value = spec.get(key, default)
-        if not isinstance(value, (int, float)) or isinstance(value, bool):
-            raise InputFileError(f"{self.path}: {where}.{key} = {value!r}, expected a number")
-        return float(value)
-
-    def vector(self, spec: dict, key: str, default: tuple, where: str) -> tuple:
-        value = spec.get(key, default)
-        ok = isinstance(value, (list, tuple)) and len(value) == 3
-        if not ok or not all(isinstance(v, (int, float)) for v in value):
-            raise InputFileError(f"{self.path}: {where}.{key} = {value!r}, expected [x, y, z]")
-        return tuple(float(v) for v in value)
-
-    def choice(
-        self, spec: dict, key: str, default: str | None, choices: tuple[str, ...], where: str
-    ) -> str | None:
-        """``spec[key]`` (or ``default`` when absent), one of ``choices``, else a one-line error."""
-        value = spec.get(key, default)
-        if value is not default and value not in choices:
-            raise InputFileError(
-                f"{self.path}: {where}.{key} = {value!r}, expected one of {', '.join(choices)}"
-            )
-        return value
-
-    def sharpness(self, spec: dict, where: str) -> float:
-        """The Banks sharpness s ∈ [0, :data:`SHARPNESS_MAX`] (default 0.9), else an error."""
-        value = self.number(spec, "sharpness", 0.9, where)
-        if not 0.0 <= value <= SHARPNESS_MAX:
-            raise InputFileError(
-                f"{self.path}: {where}.sharpness = {value!r}, expected a number in [0, 1) "
-                f"(at most {SHARPNESS_MAX})"
-            )
-        return value
-
-    def node(self, index: int, spec: dict[str, Any]) -> Node:
-        where = f"object[{index}]"
-        name = str(spec.get("name", f"object{index}"))
-        mesh = self.mesh(spec, where)
-        if "fit" in spec:
-            mesh = mesh.fitted(self.number(spec, "fit", 1.0, where))
-        role = spec.get("role", "reflector")
-        if role not in ("reflector", "local"):
-            raise InputFileError(
-                f"{self.path}: {where}.role = {role!r}, expected reflector or local"
-            )
-        mat = spec.get("material", {})
-        kd = mat.get("kd", (0.0, 0.0, 0.0))
-        kd = (float(kd),) * 3 if isinstance(kd, (int, float)) else self.vector(mat, "kd", kd, where)
+    def node(self, index: int, spec: ObjectSpec) -> Node:
+        mesh = self.mesh(spec, f"object[{index}]")
+        if spec.fit is not None:
+            mesh = mesh.fitted(spec.fit)
+        mat = spec.material
+        kd = (mat.kd,) * 3 if isinstance(mat.kd, float) else tuple(mat.kd)
         material = Material(
             kd=kd,
-            fresnel=self.number(mat, "fresnel", 1.0, f"{where}.material"),
-            phong_exponent=self.number(mat, "phong_exponent", 200.0, f"{where}.material"),
-            sharpness=self.sharpness(mat, f"{where}.material"),
-            tangent_field=TangentField(
-                self.choice(mat, "tangent_field", "axis", FIELDS, f"{where}.material"),
-                self.choice(mat, "tangent_axis", "y", tuple(AXES), f"{where}.material"),
-            ),
-            model=self.choice(mat, "model", None, MODELS, f"{where}.material"),
+            fresnel=mat.fresnel,
+            phong_exponent=mat.phong_exponent,
+            sharpness=mat.sharpness,
+            tangent_field=TangentField(mat.tangent_field, mat.tangent_axis),
+            model=mat.model,
         )
-        transform = Transform(
-            self.vector(spec, "translation", (0.0, 0.0, 0.0), where),
-            self.vector(spec, "rotation", (0.0, 0.0, 0.0), where),
-            self.number(spec, "scale", 1.0, where),
-        )
-        color = self.vector(spec, "color", (0.8, 0.8, 0.8), where)
-        return Node(name, mesh, material, transform, role, color)
+        transform = Transform(spec.translation, spec.rotation, spec.scale)
+        name = spec.name or f"object{index}"
+        return Node(name, mesh, material, transform, spec.role, spec.color)
 
-    def mesh(self, spec: dict[str, Any], where: str) -> MeshData:
-        if "mesh" in spec:
-            steps = spec.get("subdivide", 0)
-            if not isinstance(steps, int) or isinstance(steps, bool) or not 0 <= steps <= 4:
-                raise InputFileError(
-                    f"{self.path}: {where}.subdivide = {steps!r}, expected a whole number in 0..4"
-                )
-            mesh = load_mesh(self.find(spec["mesh"]), spec.get("components"))
-            return loop_subdivided(mesh, steps) if steps else mesh
-        primitive = spec.get("primitive")
-        size = self.number(spec, "size", 1.0, where)
+    def mesh(self, spec: ObjectSpec, where: str) -> MeshData:
+        if spec.mesh is not None:
+            mesh = load_mesh(self.find(spec.mesh), spec.components)
+            return loop_subdivided(mesh, spec.subdivide) if spec.subdivide else mesh
         makers = {
-            "sphere": lambda: uv_sphere(size / 2),
-            "box": lambda: box(size),
-            "room": lambda: box(size, inward=True),
+            "sphere": lambda: uv_sphere(spec.size / 2),
+            "box": lambda: box(spec.size),
+            "room": lambda: box(spec.size, inward=True),
         }
-        if primitive not in makers:
+        if spec.primitive not in makers:
             raise InputFileError(
                 f'{self.path}: {where} needs mesh = "file" or primitive = sphere|box|room'
             )
-        return makers[primitive]()
+        return makers[spec.primitive]()

@@ -29,6 +29,7 @@ import hashlib
 import os
 import sys
 import time
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -36,6 +37,7 @@ import numpy as np
 
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
+from envstudio.io.cache_entries import discard
 from envstudio.measure.ground_truth import GroundTruth
 from envstudio.render.protocols import Session
 
@@ -75,24 +77,46 @@ def cache_path(session: Session, reference: GroundTruth, size: tuple[int, int]) 
 
 
 def load_state(path: Path) -> dict[str, np.ndarray] | None:
-    """The saved accumulation at ``path``; None when absent or unreadable (then it is redone)."""
+    """The saved accumulation at ``path``; None when absent.
+
+    An entry that does not load (truncated, bit-flipped, a folder, another
+    program's file) or whose checksum does not match is discarded with a
+    one-line note: the work is then done again.
+    """
     if not path.exists():
         return None
     try:
-        with np.load(path) as data:
+        with np.load(path, allow_pickle=False) as data:
             state = {name: data[name] for name in data.files}
+        saved = str(state.pop("checksum"))
+        if saved != state_checksum(state):
+            raise ValueError("checksum mismatch")
         os.utime(path)  # used now: the last to be pruned
         return state
-    except (OSError, ValueError, EOFError) as error:
-        print(f"envstudio: warning: {path}: unreadable ({error}), starting over", file=sys.stderr)
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as error:
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        print(f"envstudio: note: {path}: unreadable ({reason}), discarded", file=sys.stderr)
+        discard(path)
         return None
 
 
+def state_checksum(state: dict[str, np.ndarray]) -> str:
+    """SHA-256 (hex) of every array of ``state``: name, dtype, shape and bytes."""
+    digest = hashlib.sha256()
+    for name in sorted(state):
+        array = np.ascontiguousarray(state[name])
+        digest.update(f"{name} {array.dtype.str} {array.shape}".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
 def save_state(path: Path, state: dict[str, np.ndarray]) -> None:
-    """Write ``state`` to ``path`` atomically (a crash leaves the previous file), then prune."""
+    """Write ``state`` with its checksum to ``path`` atomically (a crash leaves the previous
+    file), then prune."""
     path.parent.mkdir(parents=True, exist_ok=True)
+    checked = {**state, "checksum": np.array(state_checksum(state))}
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
-        np.savez(handle, **state)
+        np.savez(handle, **checked)
     prune(path.parent, path, cache_limit_bytes())
 
 

@@ -19,7 +19,7 @@ import sys
 import numpy as np
 from tqdm import tqdm
 
-from envstudio.errors import ParameterError
+from envstudio.errors import OutputFileError, ParameterError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.scene_file import resolve_scene
 from envstudio.methods.pem.bake import bake
@@ -113,6 +113,14 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--workers {args.workers}: expected 0 (in-process) or more")
 
 
+def _saved(out, args: argparse.Namespace) -> str:
+    """How many views are saved in the parts folder, and that the same command resumes."""
+    folder = parts_folder(out)
+    saved = len(list(folder.glob("view-*.npz"))) if folder.is_dir() else 0
+    total = args.views * getattr(args, "elevations", 1)
+    return f"{saved} of {total} views saved in {folder}/, the same command resumes"
+
+
 def run_bake_pem(args: argparse.Namespace) -> int:
     """Check the arguments, bake with a progress bar, write the file, print one line."""
     for name, value in DEFAULTS.items():
@@ -152,15 +160,10 @@ def run_bake_pem(args: argparse.Namespace) -> int:
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
             raise ParameterError(str(exc)) from None
         except KeyboardInterrupt:
-            folder = parts_folder(out)
-            saved = len(list(folder.glob("view-*.npz"))) if folder.is_dir() else 0
-            bar.write(
-                f"envstudio: {out}: not written; {saved} of {args.views * elevations} views "
-                f"saved in "
-                f"{folder}/, the same command resumes",
-                file=sys.stderr,
-            )
+            bar.write(f"envstudio: {out}: not written; {_saved(out, args)}", file=sys.stderr)
             raise
+        except OutputFileError as exc:  # a full disk: the views baked so far are kept
+            raise OutputFileError(f"{exc}; {_saved(out, args)} once there is room") from None
     bake = report.bake
     resumed = f", {len(report.reused)} resumed" if report.reused else ""
     scores = ", ".join(f"{name} {np.nanmean(bake.playback_psnr[name]):.1f}" for name in PLAYBACK)

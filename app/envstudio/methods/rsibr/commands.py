@@ -9,6 +9,7 @@ is done, so an interrupted bake leaves nothing under the output name.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 from tqdm import tqdm
@@ -99,7 +100,13 @@ def run_bake_rsibr(args: argparse.Namespace) -> int:
     out = check_output_path(args.output)
     environment = read_environment(args.env)
     start = time.perf_counter()
-    with tqdm(unit="texel", unit_scale=True, desc=f"rsibr {args.brdf}", leave=False) as bar:
+    with tqdm(
+        unit="texel",
+        unit_scale=True,
+        desc=f"rsibr {args.brdf}",
+        leave=False,
+        disable=not sys.stderr.isatty(),
+    ) as bar:
         bake = bake_environment(
             environment, args.brdf, values, args.size, args.views, args.samples, args.device, bar
         )

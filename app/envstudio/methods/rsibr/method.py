@@ -26,6 +26,7 @@ disk's vertices (§6's future work).
 
 from __future__ import annotations
 
+import sys
 import time
 
 import moderngl
@@ -35,6 +36,7 @@ from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import read_cube
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
+from envstudio.io.cache_entries import discard
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.bake.brdfs import BRDFS, brdf
 from envstudio.methods.rsibr.figures import figure4
@@ -132,12 +134,13 @@ class RsibrMethod(Method):
             env_key, name, values, self.map_size, 12, DEFAULT_SAMPLES
         )
         self._pending = None
-        if path.is_file():
+        if path.exists():
             try:
                 self._install(rb.load_bake(path, size=self.map_size), key)
                 return
-            except InputFileError:
-                path.unlink(missing_ok=True)  # refused: bake it again
+            except InputFileError as error:  # refused: say so, bake it again
+                print(f"envstudio: note: {error}; discarded, baking again", file=sys.stderr)
+                discard(path)
         views, faces = rb.geodesic_views(12)
         self._pending = {
             "key": key,

@@ -202,7 +202,7 @@ def save_bake(path: str | os.PathLike, bake: RsibrBake) -> Path:
     }
     arrays = _arrays(bake)
     header["checksum"] = _checksum(arrays, header)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, need=sum(a.nbytes for a in arrays.values())) as tmp:
         with open(tmp, "wb") as f:
             np.savez(f, header=np.array(json.dumps(header, sort_keys=True)), **arrays)
     return Path(path)
@@ -229,7 +229,7 @@ def load_bake(path: str | os.PathLike, size: int | None = None) -> RsibrBake:
         with np.load(path, allow_pickle=False) as data:
             header = json.loads(str(data["header"]))
             arrays = {k: np.asarray(data[k]) for k in ("maps", "views", "frames", "faces")}
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         raise InputFileError(f"{path}: not a readable .rsibr bake ({exc})") from None
     if header.get("format") != FORMAT or header.get("version") != VERSION:
         raise InputFileError(f"{path}: not an {FORMAT} version {VERSION} file")
