@@ -116,6 +116,18 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         ),
         (["bake", "pem", "--scene", "room", "--elevations", "0", "-o", "OUT"], ["--elevations 0"]),
         (["bake", "pem", "--scene", "room", "--tie", "-1", "-o", "OUT"], ["--tie -1", "[0, 10]"]),
+        (["render", "--camera", "nan,0,3", "-o", "OUT"], ["--camera 'nan,0,3'", "finite"]),
+        (["render", "--camera", "0,0,inf", "-o", "OUT"], ["--camera '0,0,inf'", "distance"]),
+        (["render", "--camera", "0,nan,3", "-o", "OUT"], ["--camera '0,nan,3'", "[-90, 90]"]),
+        (["bench", "--methods", ""], ["--methods ''", "method names"]),
+        (["bench", "--methods", " , "], ["--methods ' , '", "method names"]),
+        (["bench", "--triangles", "0"], ["--triangles 0", "expected 1.."]),
+        (["bench", "--triangles", "-5"], ["--triangles -5", "expected 1.."]),
+        (["bench", "--triangles", "1000000000"], ["--triangles 1000000000", "20,000,000"]),
+        (
+            ["render", "--method", "hwconv", "--param", "border=65536", "-o", "OUT"],
+            ["border=65536", "GL_MAX_TEXTURE_SIZE"],
+        ),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):

@@ -13,6 +13,9 @@ from envstudio.errors import ParameterError
 from envstudio.render.hooks import Command
 from envstudio.render.registry import registry
 
+#: The most triangles ``--triangles`` asks for (about 2 GB of mesh while subdividing).
+MAX_TRIANGLES = 20_000_000
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The generic options, then every plugin's table flag and its own options."""
@@ -32,8 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--triangles",
         type=int,
-        default=0,
-        help="subdivide the reflector until it has at least this many triangles",
+        help=f"subdivide the reflector until it has at least this many triangles "
+        f"(1..{MAX_TRIANGLES:,})",
     )
     parser.add_argument(
         "--converge",
@@ -154,9 +157,17 @@ def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
     from envstudio.render.display import DISPLAY_NAMES
     from envstudio.render.registry import method_class
 
-    names = args.methods.split(",") if args.methods else default_bench_methods()
+    names = default_bench_methods()
+    if args.methods is not None:
+        names = [name.strip() for name in args.methods.split(",") if name.strip()]
+        if not names:
+            raise ParameterError(
+                f"--methods {args.methods!r}: expected comma-separated method names"
+            )
     for name in names:
         method_class(name)
+    if args.triangles is not None and not 1 <= args.triangles <= MAX_TRIANGLES:
+        raise ParameterError(f"--triangles {args.triangles}: expected 1..{MAX_TRIANGLES:,}")
     _check_frames(args)
     json_out = _json_out(args)
     scene = build_scene(args.scene, args.env, args.mesh)

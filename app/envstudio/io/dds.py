@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import os
 import struct
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -29,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.io.atomic import atomic_path
+from envstudio.io.images import HALF_MAX
 
 __all__ = [
     "DXGI_FORMAT_R8G8B8A8_UNORM",
@@ -72,6 +74,14 @@ def write_dds_cube(
     Path
         ``path``.
     """
+    if pixel_format == "rgba16f":
+        brightest = max(float(np.abs(np.asarray(level)).max()) for level in levels)
+        if brightest > HALF_MAX:
+            print(
+                f"envstudio: note: {path}: values up to {brightest:.3g} clamped to "
+                f"{HALF_MAX:g}, the half floats' range",
+                file=sys.stderr,
+            )
     if pixel_format not in PIXEL_FORMATS:
         raise ValueError(f"pixel_format {pixel_format!r}: expected one of {sorted(PIXEL_FORMATS)}")
     dxgi, texel_bytes = PIXEL_FORMATS[pixel_format]
@@ -106,7 +116,8 @@ def write_dds_cube(
 
 
 def _encode(rgba: np.ndarray, pixel_format: str) -> bytes:
-    """The texels of one face level as the file stores them."""
+    """The texels of one face level as the file stores them (half floats clamped to their
+    range: :func:`write_dds_cube` says when it clamps)."""
     if pixel_format == "rgba16f":
-        return rgba.astype("<f2").tobytes()
+        return np.clip(rgba, -HALF_MAX, HALF_MAX).astype("<f2").tobytes()
     return np.rint(np.clip(rgba, 0.0, 1.0) * 255.0).astype(np.uint8).tobytes()

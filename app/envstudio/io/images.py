@@ -18,6 +18,11 @@ from envstudio.errors import InputFileError
 from envstudio.io.atomic import atomic_path, check_output_path
 
 HDR_SUFFIXES = (".exr", ".hdr")
+#: The largest magnitude a half float holds; an EXR with larger values is written in float32.
+HALF_MAX = 65504.0
+#: Radiance past this is refused as out of range: far above any capture (the sun's disc is
+#: about 1.6e9 cd/m²), and its squares would overflow the float32 sums the methods make.
+MAX_RADIANCE = 1e12
 LDR_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 
@@ -78,6 +83,12 @@ def read_environment(path: str | os.PathLike) -> npt.NDArray[np.float32]:
     if w != 2 * h:
         raise InputFileError(f"{path}: lat-long map is {w}x{h}, expected width = 2 x height")
     bad = ~np.isfinite(pixels)
+    if not bad.any() and float(np.abs(pixels).max(initial=0.0)) > MAX_RADIANCE:
+        y, x = np.argwhere(np.abs(pixels).max(axis=2) > MAX_RADIANCE)[0]
+        raise InputFileError(
+            f"{path}: radiance {float(np.abs(pixels[y, x]).max()):.3g} at x={x}, y={y} is out "
+            f"of range (expected at most {MAX_RADIANCE:g})"
+        )
     if bad.any():
         y, x = np.argwhere(bad.any(axis=2))[0]
         raise InputFileError(
@@ -94,9 +105,10 @@ def write_image(path: str | os.PathLike, pixels: npt.ArrayLike) -> Path:
     Parameters
     ----------
     path
-        ``.exr``/``.hdr`` get linear float data (EXR as half float with ZIP
-        compression); ``.png``/``.jpg`` expect display values in [0, 1] (float)
-        or uint8 and are stored as 8-bit.
+        ``.exr``/``.hdr`` get linear float data (EXR with ZIP compression, as half
+        float where every value fits, else as float32: a bright sun stays finite);
+        ``.png``/``.jpg`` expect display values in [0, 1] (float) or uint8 and are
+        stored as 8-bit.
     pixels
         (h, w) or (h, w, c) array, row 0 at the top.
 
@@ -115,7 +127,8 @@ def write_image(path: str | os.PathLike, pixels: npt.ArrayLike) -> Path:
         data = data[:, :, None]
     if suffix in HDR_SUFFIXES:
         data = np.ascontiguousarray(data, dtype=np.float32)
-        fmt = "half" if suffix == ".exr" else "float"
+        fits_half = float(np.nan_to_num(np.abs(data), posinf=np.inf).max(initial=0.0)) <= HALF_MAX
+        fmt = "half" if suffix == ".exr" and fits_half else "float"
     elif suffix in LDR_SUFFIXES:
         if data.dtype != np.uint8:
             data = np.clip(np.nan_to_num(data.astype(np.float32)) * 255.0 + 0.5, 0, 255)

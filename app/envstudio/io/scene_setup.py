@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -62,8 +63,11 @@ def parse_camera(text: str) -> tuple[float, float, float]:
         az, el, dist = (float(p) for p in parts)
     except ValueError:
         raise ParameterError(f"--camera {text!r}: expected AZIMUTH,ELEVATION,DISTANCE") from None
-    if not -90.0 <= el <= 90.0 or dist <= 0.0:
-        raise ParameterError(f"--camera {text!r}: elevation must be in [-90, 90], distance > 0")
+    if not math.isfinite(az) or not -90.0 <= el <= 90.0 or not 0.0 < dist < 1e30:
+        raise ParameterError(
+            f"--camera {text!r}: expected a finite azimuth, elevation in [-90, 90] and a "
+            "finite distance > 0"
+        )
     return az, el, dist
 
 

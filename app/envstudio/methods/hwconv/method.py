@@ -157,10 +157,16 @@ class HwConvMethod(Method):
         size, border = int(values["map_size"]), int(values["border"])
         limit = int(self.ctx.info["GL_MAX_TEXTURE_SIZE"])
         if size + 2 * border > limit:
-            raise ParameterError(
-                f"map_size={size}: expected an integer in [8, {max(limit - 2 * border, 8)}] "
+            faces = (
                 f"(faces of map_size + 2·border={size + 2 * border} texels exceed "
                 f"GL_MAX_TEXTURE_SIZE={limit})"
+            )
+            if size <= limit - 2 * 8:  # the map fits: the border is what is too large
+                raise ParameterError(
+                    f"border={border}: expected an integer in [0, {(limit - size) // 2}] {faces}"
+                )
+            raise ParameterError(
+                f"map_size={size}: expected an integer in [8, {max(limit - 2 * border, 8)}] {faces}"
             )
         plan = plan_filters(
             float(values["phong_exponent"]),
