@@ -1,5 +1,6 @@
 """Bad input: one line naming the file or value and what was expected, exit status 2."""
 
+import json
 import os
 import subprocess
 import sys
@@ -10,7 +11,7 @@ import OpenImageIO as oiio
 import pytest
 
 from envstudio.cli import main
-from envstudio.io.images import write_image
+from envstudio.io.images import read_image, write_image
 from envstudio.methods.pem.method import shipped_bake
 from envstudio.resources import asset_root
 
@@ -128,6 +129,10 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
             ["render", "--method", "hwconv", "--param", "border=65536", "-o", "OUT"],
             ["border=65536", "GL_MAX_TEXTURE_SIZE"],
         ),
+        (["bench", "--methods", "mirror", "--json", "OUT.txt"], ["OUT.txt", ".json file"]),
+        (["bake", "rsibr", "--env", STUDIO, "-o", "OUT.txt"], ["OUT.txt", ".rsibr file"]),
+        (["bake", "pem", "--scene", "room", "-o", "OUT.txt"], ["OUT.txt", ".pem file"]),
+        (["sh", "--env", STUDIO, "--max-env-width", "4"], ["--max-env-width 4", "at least 8"]),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):
@@ -221,3 +226,27 @@ def test_bad_banks_material_in_a_scene_file(capsys, tmp_path, material, fragment
     )
     status, err = run_cli(capsys, "render", "--scene", str(scene), "-o", str(tmp_path / "o.png"))
     assert_one_line_error(status, err, "brushed.toml", *fragments)
+
+
+def test_an_8_bit_image_is_not_an_environment(capsys, tmp_path):
+    path = tmp_path / "photo.png"
+    write_image(path, np.full((16, 32, 3), 0.5, np.float32))
+    status, err = run_cli(capsys, "render", "--env", str(path), "-o", str(tmp_path / "o.png"))
+    assert_one_line_error(status, err, "photo.png", "linear HDR", "display values")
+
+
+def test_a_map_too_large_for_the_memory_is_refused_from_its_header(capsys, tmp_path, monkeypatch):
+    """The estimate comes from the header; --max-env-width box-filters the map as it is read."""
+    path = tmp_path / "big.exr"
+    radiance = np.random.default_rng(1).random((256, 512, 3)).astype(np.float32)
+    write_image(path, radiance)
+    monkeypatch.setenv("ENVSTUDIO_MEMORY_MB", "10")
+    status, err = run_cli(capsys, "sh", "--env", str(path))
+    assert_one_line_error(status, err, "512x256", "10 MB are available", "--max-env-width 256")
+    assert main(["sh", "--env", str(path), "--max-env-width", "128", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["source"] == "128x64 lat-long"
+    # L0 = ∫ L Y0: the box filter keeps the map's mean radiance (the solid angles change little)
+    assert report["coefficients"][0][0] == pytest.approx(
+        float(np.mean(read_image(path)[..., 0])) * 2 * np.sqrt(np.pi), rel=0.01
+    )

@@ -86,13 +86,9 @@ def full_disk(tmp_path):
 
 @pytest.mark.parametrize("name", list(WRITERS))
 def test_an_output_that_is_a_folder_is_one_line(capsys, tmp_path, name):
-    folder = tmp_path / "out.d"
+    folder = tmp_path / f"out{Path(WRITERS[name][-1]).suffix}"  # a folder named as the file
     folder.mkdir()
-    argv = [
-        str(folder) if a.startswith(str(tmp_path / "OUT")) else a
-        for a in _argv(name, tmp_path / "OUT")
-    ]
-    status, err = run_cli(capsys, *argv)
+    status, err = run_cli(capsys, *_argv(name, tmp_path / "out"))
     assert_one_line_error(status, err, str(folder), "is a folder")
     assert list(folder.iterdir()) == []
 

@@ -101,7 +101,7 @@ def _check_frames(args: argparse.Namespace) -> None:
 def _json_out(args: argparse.Namespace):
     from envstudio.io.atomic import check_output_path
 
-    return check_output_path(args.json_out) if args.json_out else None
+    return check_output_path(args.json_out, (".json",)) if args.json_out else None
 
 
 def _report(text: str, report: dict, json_out) -> int:
@@ -170,7 +170,7 @@ def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
         raise ParameterError(f"--triangles {args.triangles}: expected 1..{MAX_TRIANGLES:,}")
     _check_frames(args)
     json_out = _json_out(args)
-    scene = build_scene(args.scene, args.env, args.mesh)
+    scene = build_scene(args.scene, args.env, args.mesh, args.max_env_width)
     if args.triangles:
         subdivide_reflectors(scene, args.triangles)
     session = session_from_args(args, scene)

@@ -17,6 +17,18 @@ def add_scene_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--mesh", help="mesh file (OBJ, PLY, STL, OFF, GLB), replaces the reflector"
     )
+    add_env_width_option(parser)
+
+
+def add_env_width_option(parser: argparse.ArgumentParser) -> None:
+    """``--max-env-width W``: box-filter a larger environment as it is read."""
+    parser.add_argument(
+        "--max-env-width",
+        type=int,
+        metavar="W",
+        help="box-filter the environment to at most W texels wide as it is read "
+        "(for maps larger than the memory available)",
+    )
 
 
 def add_param_option(parser: argparse.ArgumentParser) -> None:
@@ -75,7 +87,9 @@ def session_from_args(args: argparse.Namespace, scene=None):
     from envstudio.render.session import RenderSession
 
     camera = parse_camera(args.camera) if getattr(args, "camera", None) else None
-    session = RenderSession(scene or build_scene(args.scene, args.env, args.mesh))
+    session = RenderSession(
+        scene or build_scene(args.scene, args.env, args.mesh, args.max_env_width)
+    )
     if camera:
         session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
     return session

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from envstudio.commands.common import add_env_width_option
 from envstudio.errors import ParameterError
 from envstudio.render.hooks import Command
 
@@ -11,6 +12,7 @@ from envstudio.render.hooks import Command
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The environment, the representation, its size and border, the output."""
     parser.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    add_env_width_option(parser)
     parser.add_argument(
         "--to",
         required=True,
@@ -38,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(
             f"--size {args.size} --border {args.border}: expected 1..8192 and 0 <= border < size/2"
         )
-    radiance = read_environment(args.env)
+    radiance = read_environment(args.env, args.max_env_width)
     ctx = create_headless_context()
     programs = ProgramLibrary(ctx)
     try:

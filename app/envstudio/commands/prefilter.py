@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from envstudio.commands.common import add_env_width_option
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import read_environment, write_image
@@ -101,7 +102,7 @@ def _checked_args(args: argparse.Namespace) -> kernels.Kernel:
 
 def _source(args: argparse.Namespace) -> np.ndarray:
     """The ``--env`` map, box-filtered to ``--source-height`` rows when given."""
-    radiance = read_environment(args.env)
+    radiance = read_environment(args.env, args.max_env_width)
     if args.source_height is not None:
         if radiance.shape[0] % args.source_height:
             raise ParameterError(
@@ -356,9 +357,9 @@ def run_prefilter_bench(args: argparse.Namespace) -> int:
         return _run_chain_bench(args)
     face = _bench_face(args.size)
     exponents = _exponents(args.exponents)
-    json_out = check_output_path(args.json_out) if args.json_out else None
+    json_out = check_output_path(args.json_out, (".json",)) if args.json_out else None
     env = args.env or str(asset_root() / "hdr" / "studio.exr")
-    radiance = read_environment(env)
+    radiance = read_environment(env, args.max_env_width)
     sweep = SWEEP_FACES if json_out else ()
     for n in (face, *sweep):
         if radiance.shape[0] % n:
@@ -386,9 +387,9 @@ def _run_chain_bench(args: argparse.Namespace) -> int:
     from envstudio.prefilter.bench import format_chain_report, run_chain_bench
     from envstudio.resources import asset_root
 
-    json_out = check_output_path(args.json_out) if args.json_out else None
+    json_out = check_output_path(args.json_out, (".json",)) if args.json_out else None
     env = args.env or str(asset_root() / "hdr" / "studio.exr")
-    report = run_chain_bench(read_environment(env))
+    report = run_chain_bench(read_environment(env, args.max_env_width))
     report["environment"] = env
     print(format_chain_report(report))
     if json_out:
@@ -400,6 +401,7 @@ def _run_chain_bench(args: argparse.Namespace) -> int:
 def add_arguments(prefilter: argparse.ArgumentParser) -> None:
     """Source, kernel, algorithm, target, size, the chain's options, output."""
     prefilter.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    add_env_width_option(prefilter)
     prefilter.add_argument(
         "--kernel",
         choices=("diffuse", "phong", "lobe"),

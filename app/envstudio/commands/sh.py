@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from envstudio.commands.common import add_env_width_option
 from envstudio.errors import ParameterError
 from envstudio.render.hooks import Command
 
@@ -12,6 +13,7 @@ from envstudio.render.hooks import Command
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Environment, order, lights, source resampling, check, JSON."""
     parser.add_argument("--env", required=True, help="lat-long environment (.exr or .hdr)")
+    add_env_width_option(parser)
     parser.add_argument(
         "--coefficients",
         type=int,
@@ -54,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.cube is not None and not 8 <= args.cube <= 1024:
         raise ParameterError(f"--cube {args.cube}: expected a face size in 8..1024")
-    radiance = read_environment(args.env)
+    radiance = read_environment(args.env, args.max_env_width)
     if args.height is not None:
         if args.height < 1 or radiance.shape[0] % args.height:
             raise ParameterError(

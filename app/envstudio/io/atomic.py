@@ -17,23 +17,34 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from envstudio.errors import InputFileError, OutputFileError
+from envstudio.errors import InputFileError, OutputFileError, ParameterError
 
 
-def check_output_path(path: str | os.PathLike) -> Path:
+def check_output_path(path: str | os.PathLike, suffixes: tuple[str, ...] = ()) -> Path:
     """Return ``path`` as a Path after checking a file can be written there.
 
     Called once, up front, by every command that writes (through
     :func:`atomic_path` too), so bad output paths fail before any work.
 
+    Parameters
+    ----------
+    path
+        The file to write.
+    suffixes
+        The suffixes it may have (any when empty), e.g. ``(".json",)``.
+
     Raises
     ------
     InputFileError
         If the parent folder does not exist.
+    ParameterError
+        If ``path`` has none of ``suffixes``.
     OutputFileError
         If ``path`` is a folder, or its folder cannot be written (read-only).
     """
     path = Path(path)
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise ParameterError(f"{path}: expected a {' or '.join(suffixes)} file name")
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InputFileError(f"{path}: folder {parent} does not exist")

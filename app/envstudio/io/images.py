@@ -14,8 +14,9 @@ import numpy as np
 import numpy.typing as npt
 import OpenImageIO as oiio
 
-from envstudio.errors import InputFileError
+from envstudio.errors import InputFileError, ParameterError
 from envstudio.io.atomic import atomic_path, check_output_path
+from envstudio.io.memory import available_memory, megabytes
 
 HDR_SUFFIXES = (".exr", ".hdr")
 #: The largest magnitude a half float holds; an EXR with larger values is written in float32.
@@ -23,6 +24,9 @@ HALF_MAX = 65504.0
 #: Radiance past this is refused as out of range: far above any capture (the sun's disc is
 #: about 1.6e9 cd/m²), and its squares would overflow the float32 sums the methods make.
 MAX_RADIANCE = 1e12
+#: Peak bytes per lat-long texel of the heaviest commands (``sh``, ``render``: about 180
+#: measured at 16384 x 8192), for the memory check before a map is read.
+BYTES_PER_TEXEL = 200
 LDR_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 
@@ -40,13 +44,7 @@ def read_image(path: str | os.PathLike) -> npt.NDArray[np.float32]:
         If the file is missing, not an image, or truncated.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputFileError(f"{path}: no such file (expected an .exr or .hdr image)")
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        reason = oiio.geterror().strip().splitlines()
-        detail = reason[0] if reason else "unknown format"
-        raise InputFileError(f"{path}: not a readable image ({detail})")
+    inp = _open(path)
     try:
         pixels = inp.read_image("float")
         error = inp.geterror() if pixels is None else ""
@@ -61,11 +59,23 @@ def read_image(path: str | os.PathLike) -> npt.NDArray[np.float32]:
     return pixels
 
 
-def read_environment(path: str | os.PathLike) -> npt.NDArray[np.float32]:
+def read_environment(
+    path: str | os.PathLike, max_width: int | None = None
+) -> npt.NDArray[np.float32]:
     """Read a lat-long HDR environment (.exr or .hdr).
 
     Negative values left by lossy compression are clamped to 0; grey images are
-    expanded to RGB; alpha is dropped.
+    expanded to RGB; alpha is dropped. The memory the map will take in the
+    heaviest commands (:data:`BYTES_PER_TEXEL`) is estimated from the file's
+    header before its pixels are read.
+
+    Parameters
+    ----------
+    path
+        The file.
+    max_width
+        Box-filter the map, as it is read (a block of rows at a time), by the
+        smallest whole factor that brings its width to at most this.
 
     Returns
     -------
@@ -75,13 +85,35 @@ def read_environment(path: str | os.PathLike) -> npt.NDArray[np.float32]:
     Raises
     ------
     InputFileError
-        If the file is unreadable, not 2:1, or holds NaN/Inf pixels.
+        If the file is unreadable, not 2:1, too large for the memory available
+        (naming both and the ``--max-env-width`` that fits), holds NaN/Inf pixels
+        or radiance past :data:`MAX_RADIANCE`.
     """
     path = Path(path)
-    pixels = read_image(path)
-    h, w, c = pixels.shape
+    if path.suffix.lower() not in HDR_SUFFIXES:
+        raise InputFileError(
+            f"{path}: expected a linear HDR environment (.exr or .hdr); an 8-bit image holds "
+            "display values, not radiance"
+        )
+    if max_width is not None and not 8 <= max_width:
+        raise ParameterError(f"--max-env-width {max_width}: expected a width of at least 8")
+    w, h, c = _header(path)
     if w != 2 * h:
         raise InputFileError(f"{path}: lat-long map is {w}x{h}, expected width = 2 x height")
+    step = 1 if max_width is None or w <= max_width else -(-w // max(int(max_width), 2))
+    while h % step:
+        step += 1
+    need = (w // step) * (h // step) * BYTES_PER_TEXEL + step * w * c * 4
+    available = available_memory()
+    if need > available:
+        fits = 2 ** int(np.log2(max(np.sqrt(2.0 * available / BYTES_PER_TEXEL), 2.0)))
+        raise InputFileError(
+            f"{path}: a {w}x{h} map needs about {megabytes(need)} of memory and "
+            f"{megabytes(available)} are available; --max-env-width {fits} box-filters it "
+            "as it is read"
+        )
+    pixels = read_image(path) if step == 1 else _box_filtered(path, step)
+    h, w, c = pixels.shape
     bad = ~np.isfinite(pixels)
     if not bad.any() and float(np.abs(pixels).max(initial=0.0)) > MAX_RADIANCE:
         y, x = np.argwhere(np.abs(pixels).max(axis=2) > MAX_RADIANCE)[0]
@@ -97,6 +129,49 @@ def read_environment(path: str | os.PathLike) -> npt.NDArray[np.float32]:
         )
     rgb = np.repeat(pixels[:, :, :1], 3, axis=2) if c < 3 else pixels[:, :, :3]
     return np.ascontiguousarray(np.maximum(rgb, 0.0), dtype=np.float32)
+
+
+def _open(path: Path):
+    """An ImageInput of ``path``, or the one-line error read_image gives."""
+    if not path.is_file():
+        raise InputFileError(f"{path}: no such file (expected an .exr or .hdr image)")
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        reason = oiio.geterror().strip().splitlines()
+        detail = reason[0] if reason else "unknown format"
+        raise InputFileError(f"{path}: not a readable image ({detail})")
+    return inp
+
+
+def _header(path: Path) -> tuple[int, int, int]:
+    """(width, height, channels) from the file's header, no pixels read."""
+    inp = _open(path)
+    try:
+        spec = inp.spec()
+        return spec.width, spec.height, spec.nchannels
+    finally:
+        inp.close()
+
+
+def _box_filtered(path: Path, step: int) -> npt.NDArray[np.float32]:
+    """The image box-filtered by ``step`` in both directions, read ``step`` rows at a time."""
+    inp = _open(path)
+    try:
+        spec = inp.spec()
+        w, h, c = spec.width, spec.height, spec.nchannels
+        out = np.empty((h // step, w // step, c), np.float32)
+        for row in range(h // step):
+            block = inp.read_scanlines(row * step, (row + 1) * step, 0, 0, c, "float")
+            if block is None:
+                detail = inp.geterror().strip().splitlines()
+                raise InputFileError(
+                    f"{path}: truncated or corrupt image ({detail[0] if detail else 'no data'})"
+                )
+            block = np.asarray(block, np.float32).reshape(step, w // step, step, c)
+            out[row] = block.mean(axis=(0, 2))
+        return out
+    finally:
+        inp.close()
 
 
 def write_image(path: str | os.PathLike, pixels: npt.ArrayLike) -> Path:

@@ -165,8 +165,11 @@ def resolve_scene(name_or_path: str | os.PathLike) -> Path:
     return path
 
 
-def load_scene(name_or_path: str | os.PathLike) -> Scene:
+def load_scene(name_or_path: str | os.PathLike, max_env_width: int | None = None) -> Scene:
     """Read a scene file (or a shipped scene by name) with its environment and meshes.
+
+    The environment is box-filtered to at most ``max_env_width`` texels wide as it is
+    read (None: as it is).
 
     Raises
     ------
@@ -178,7 +181,7 @@ def load_scene(name_or_path: str | os.PathLike) -> Scene:
     spec = read_scene_spec(path)
     reader = _SceneReader(path)
     env_file = reader.find(spec.environment.file)
-    environment = Environment(read_environment(env_file), env_file)
+    environment = Environment(read_environment(env_file, max_env_width), env_file)
     nodes = [reader.node(i, obj) for i, obj in enumerate(spec.object)]
     cam = spec.camera
     camera = OrbitCamera(

@@ -20,15 +20,20 @@ def build_scene(
     scene: str | os.PathLike | None = None,
     env: str | os.PathLike | None = None,
     mesh: str | os.PathLike | None = None,
+    max_env_width: int | None = None,
 ) -> Scene:
     """Load ``scene`` (default ``studio``), then replace its environment and/or reflector.
 
     A replacement mesh is centred and fitted into the unit sphere and keeps
-    the first reflector's material.
+    the first reflector's material; an environment wider than ``max_env_width``
+    is box-filtered as it is read.
     """
-    result = load_scene(scene or DEFAULT_SCENE)
     if env is not None:
-        result.environment = Environment(read_environment(env), Path(env))
+        read = read_environment(env, max_env_width)
+        result = load_scene(scene or DEFAULT_SCENE)
+        result.environment = Environment(read, Path(env))
+    else:
+        result = load_scene(scene or DEFAULT_SCENE, max_env_width)
     if mesh is not None:
         result.nodes = [
             *replace_reflector(result, load_mesh(mesh).fitted(1.0)),

@@ -181,17 +181,19 @@ def _start_scene(
     else:
         wanted = given
     try:
-        return _load_start(*wanted)
+        return _load_start(*wanted, args.max_env_width)
     except UserError as exc:
         if wanted == given:
             raise
         warnings.append(f"cannot restore the last scene ({exc}); using the defaults")
-        return _load_start(*given)
+        return _load_start(*given, args.max_env_width)
 
 
-def _load_start(spec: str | None, environment: str | None, mesh: str | None) -> StartScene:
+def _load_start(
+    spec: str | None, environment: str | None, mesh: str | None, max_env_width: int | None
+) -> StartScene:
     spec = spec or DEFAULT_SCENE
-    scene = build_scene(spec, environment, None)
+    scene = build_scene(spec, environment, None, max_env_width)
     reflectors = scene.reflectors()
     if mesh:
         scene.nodes = replace_reflector(scene, load_mesh(mesh).fitted(1.0))

@@ -129,7 +129,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
     _check(args)
     if args.scene is None:
         raise ParameterError("bake pem: --scene is required (a shipped name or a TOML file)")
-    out = check_output_path(args.output)
+    out = check_output_path(args.output, (".pem",))
     resolve_scene(args.scene)
     elevations = getattr(args, "elevations", 1)
 

@@ -76,6 +76,12 @@ def _bake_gpu(environment, name, values, size, views, samples, progress) -> rb.R
 def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``envstudio bake rsibr``."""
     parser.add_argument("--env", help="lat-long environment (.exr or .hdr), required")
+    parser.add_argument(
+        "--max-env-width",
+        type=int,
+        metavar="W",
+        help="box-filter the environment to at most W texels wide as it is read",
+    )
     parser.add_argument("--brdf", default="phong", help="phong, lambertian or carpaint")
     parser.add_argument("--size", type=int, default=64, help="map edge in texels (64)")
     parser.add_argument("--views", type=int, default=12, help="12 (icosahedron) or 42")
@@ -97,8 +103,8 @@ def run_bake_rsibr(args: argparse.Namespace) -> int:
     if not 1 <= args.samples <= 65536:
         raise ParameterError(f"--samples {args.samples}: expected an integer in [1, 65536]")
     rb.geodesic_views(args.views)  # refuses a count it does not know
-    out = check_output_path(args.output)
-    environment = read_environment(args.env)
+    out = check_output_path(args.output, (".rsibr",))
+    environment = read_environment(args.env, args.max_env_width)
     start = time.perf_counter()
     with tqdm(
         unit="texel",
