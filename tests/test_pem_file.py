@@ -54,6 +54,7 @@ def test_round_trip_equals_inference(baked):
     assert [lv.shape for lv in bake.maps["local"]] == [(2, 2, 6, n, n, 4) for n in (4, 2, 1)]
     assert bake.maps["distant"][0].dtype == np.float32
     assert bake.view_space == arc_views(scene.camera, 2, 5.0).describe()
+    assert bake.parameters["environment"] == scene.environment.checksum()  # recorded
     # the file holds each view's bake_view maps to half-float precision, every level
     camera = arc_views(scene.camera, 2, 5.0).cameras()[1]
     task = ViewTask(

@@ -290,3 +290,22 @@ def test_figures_of_the_shipped_bake(tmp_path, capsys):
     for path in (off, maps):
         image = read_image(path)
         assert image.shape[0] > 200 and image.std() > 0.05
+
+
+def test_a_bake_under_another_environment_plays_with_a_warning(gl_ctx, room, capsys):
+    """The bake records its environment's checksum; the scene's own plays quietly."""
+    scene, box, ellipsoids = room
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    own = _fake_bake(scene, box, ellipsoids)
+    own.parameters = {**own.parameters, "environment": scene.environment.checksum()}
+    method.show(own, session.gpu_scene, Path("own.pem"))
+    session.render_offscreen(method, (R, R))
+    assert "another environment" not in method.status_line()
+    other = _fake_bake(scene, box, ellipsoids)
+    other.parameters = {**other.parameters, "environment": "0" * 64}
+    method.show(other, session.gpu_scene, Path("other.pem"))
+    session.render_offscreen(method, (R, R))
+    assert "other.pem was baked under another environment than interior" in method.status_line()
+    assert "another environment" in capsys.readouterr().err
+    session.release()

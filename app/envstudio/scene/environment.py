@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,13 @@ class Environment:
     def name(self) -> str:
         """Short name for the UI."""
         return self.source.stem if self.source else "procedural"
+
+    def checksum(self) -> str:
+        """SHA-256 (hex) of the radiance's float32 pixels and shape: which map this is."""
+        pixels = np.ascontiguousarray(self.radiance, dtype=np.float32)
+        digest = hashlib.sha256(repr(pixels.shape).encode())
+        digest.update(pixels.tobytes())
+        return digest.hexdigest()
 
     @classmethod
     def constant(cls, rgb: npt.ArrayLike, height: int = 8) -> Environment:

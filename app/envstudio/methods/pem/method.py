@@ -13,6 +13,7 @@ and says how to bake one.
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +32,7 @@ from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter, ReportExt
 from envstudio.render.images import to_ldr, upright
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.graph import Scene
 
 __all__ = ["PemMethod", "shipped_bake"]
 
@@ -113,6 +115,7 @@ class PemMethod(Method):
         super().__init__(ctx, programs)
         self._loaded: _Loaded | None = None
         self._missing: str = ""
+        self._other_environment = ""  # the bake's recorded environment is not the scene's
         self._dummy: dict[str, moderngl.Texture] = {}
         self._thumbnails: list[moderngl.Texture] = []
         self._last_play: float | None = None
@@ -186,6 +189,7 @@ class PemMethod(Method):
             the bake shown before stays.
         """
         check_bake_for_scene(bake, scene.scene, path)
+        self._other_environment = _environment_note(bake, scene.scene, path)
         textures = PemTextures(self.ctx, bake)
         self._release_loaded()
         self._missing = ""
@@ -330,6 +334,8 @@ class PemMethod(Method):
     def status_line(self) -> str:
         if self._missing:
             return self._missing
+        if self._other_environment and self._loaded is not None:
+            return self._other_environment
         if self._loaded is None or self.last_blend is None:
             return ""
         if self._moved:
@@ -476,3 +482,20 @@ class PemMethod(Method):
         for texture in self._dummy.values():
             texture.release()
         self._dummy = {}
+
+
+def _environment_note(bake: PemBake, scene: Scene, path: Path) -> str:
+    """A warning when ``bake`` records another environment than the scene's (else "").
+
+    A bake holds the far field it was traced under; played under another map it
+    shows the old one. Bakes made before the record are taken as they are.
+    """
+    recorded = bake.parameters.get("environment")
+    if recorded is None or recorded == scene.environment.checksum():
+        return ""
+    note = (
+        f"{path.name} was baked under another environment than {scene.environment.name}: "
+        "its maps show that one; bake again for this map"
+    )
+    print(f"envstudio: warning: {note}", file=sys.stderr)
+    return note

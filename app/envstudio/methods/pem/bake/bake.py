@@ -496,6 +496,7 @@ def run_bake(
         "lookup": "pixel centre, trilinear (bake/pem/lookups.py)",
         "lookups": lookups,
         "hull": "convex hull of all reflector parts",
+        "environment": scene_obj.environment.checksum(),
     }
     key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
     tasks = [
