@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Measure, write the report, print the table and any warning."""
     from envstudio.core.metrics import MIN_SIZE
-    from envstudio.io.atomic import check_output_path
+    from envstudio.io.atomic import check_output_folder
     from envstudio.io.scene_setup import parse_camera, parse_size
     from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
     from envstudio.measure.report import format_table, write_report
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     if args.frames < 1 or args.warmup < 0:
         raise ParameterError("--frames must be >= 1 and --warmup >= 0")
     time_limit = parse_time_limit(args.time_limit)
-    out = check_output_path(args.out)
+    out = check_output_folder(args.out)
     if args.camera:
         parse_camera(args.camera)
     session = session_from_args(args)

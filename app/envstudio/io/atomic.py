@@ -57,6 +57,31 @@ def check_output_path(path: str | os.PathLike, suffixes: tuple[str, ...] = ()) -
     return path
 
 
+def check_output_folder(path: str | os.PathLike) -> Path:
+    """Return ``path`` as a Path after checking a folder of files can be written there
+    (it exists as a folder, or can be made in a writable folder).
+
+    Raises
+    ------
+    InputFileError
+        If the parent folder does not exist.
+    OutputFileError
+        If ``path`` is a file, or the folder that would hold it or its files is read-only.
+    """
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputFileError(f"{path}: folder {parent} does not exist")
+    if path.exists() and not path.is_dir():
+        raise OutputFileError(f"{path}: is a file, expected a folder for the report")
+    where = path if path.is_dir() else parent
+    if not os.access(where, os.W_OK | os.X_OK):
+        raise OutputFileError(
+            f"{path}: folder {where} is not writable (read-only or no permission)"
+        )
+    return path
+
+
 def _megabytes(count: int) -> str:
     return f"{count / 2**20:.1f} MB" if count >= 2**20 else f"{count / 2**10:.0f} kB"
 

@@ -41,7 +41,7 @@ import numpy.typing as npt
 
 from envstudio.core.colormap import MAGMA_STOPS, magma
 from envstudio.core.env_sampling import LUMINANCE
-from envstudio.io.atomic import check_output_path, write_text_atomic
+from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
 from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
@@ -74,7 +74,7 @@ def write_report(comparison: Comparison, folder: str | os.PathLike) -> list[Path
     list of Path
         The files written.
     """
-    folder = check_output_path(folder)
+    folder = check_output_folder(folder)
     folder.mkdir(exist_ok=True)
     reference = comparison.reference
     written = [
