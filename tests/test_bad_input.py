@@ -136,11 +136,16 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):
-    argv = [a.replace("OUT", str(tmp_path / "out.png")) if a == "OUT" else a for a in argv]
+    """One line, exit 2, and nothing written: an existing output is left as it was."""
+    kept = tmp_path / "out.png"
+    kept.write_bytes(b"an earlier result")
+    argv = [a.replace("OUT", str(kept)) if a == "OUT" else a for a in argv]
     argv = [str(tmp_path / a) if a.startswith(("MISSING", "OUT.")) else a for a in argv]
     argv = [a.replace("ROOM", str(shipped_bake("room"))) for a in argv]
     status, err = run_cli(capsys, *argv)
     assert_one_line_error(status, err, *fragments)
+    assert kept.read_bytes() == b"an earlier result"
+    assert [p.name for p in tmp_path.iterdir() if p.name != "cache"] == ["out.png"]
 
 
 def test_bad_scene_file(capsys, tmp_path):

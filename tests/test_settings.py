@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from envstudio.errors import OutputFileError
 from envstudio.ui import settings as settings_module
 from envstudio.ui.settings import ViewerSettings, load_settings, save_settings, settings_path
 
@@ -139,7 +140,7 @@ def test_failure_while_writing_leaves_old_file_and_no_temporary(config_dir, monk
 
     with monkeypatch.context() as patch:
         patch.setattr(Path, "write_text", write_half_then_fail)
-        with pytest.raises(OSError, match="No space left"):
+        with pytest.raises(OutputFileError, match=r"settings\.json: not written, the disk is full"):
             save_settings(ViewerSettings())
 
     assert settings_path().read_bytes() == before

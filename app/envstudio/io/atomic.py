@@ -162,6 +162,5 @@ def _umask() -> int:
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
-    data = text.encode("utf-8")
-    with atomic_path(path, need=len(data)) as tmp:
-        tmp.write_bytes(data)
+    with atomic_path(path, need=len(text.encode("utf-8"))) as tmp:
+        tmp.write_text(text, encoding="utf-8")
