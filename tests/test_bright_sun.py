@@ -57,6 +57,11 @@ OUTPUTS = {
     "envmap latlong": (["envmap", "--to", "latlong", "--size", "32"], "", 0.03),
     "envmap cube": (["envmap", "--to", "cube", "--size", "32"], "", 0.03),
     "envmap paraboloid": (["envmap", "--to", "paraboloid", "--size", "32"], "", None),
+    "render rsibr": (
+        ["render", "--method", "rsibr", "--size", "32x32", "--param", "map_size=16"],
+        "",
+        None,
+    ),
     "envmap spheremap": (["envmap", "--to", "spheremap", "--size", "32"], "", None),
     "prefilter brute": (
         [*PHONG, "--algo", "brute"],

@@ -6,7 +6,10 @@ are real: tmpfs mounts where the test runs as root, a folder without write permi
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -109,3 +112,22 @@ def test_a_full_disk_keeps_the_old_file_and_says_so(capsys, full_disk, name):
     assert_one_line_error(status, err, str(out), "disk is full", "unchanged")
     assert out.read_bytes() == before
     assert sorted(p.name for p in full_disk.iterdir() if p.name.startswith(".")) == []
+
+
+def test_sigterm_ends_a_long_command_at_once_and_writes_nothing(tmp_path):
+    """A killed brute-force prefilter stops within a second: exit 130, no file, no traceback."""
+    out = tmp_path / "long.exr"
+    argv = [*WRITERS["prefilter"][:-8], "--algo", "brute", "--param", "cube", "--size", "256"]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "envstudio", *argv, "-o", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    time.sleep(3.0)  # past the imports, into the work
+    assert process.poll() is None, process.stderr.read()
+    start = time.perf_counter()
+    process.send_signal(signal.SIGTERM)
+    err = process.communicate(timeout=30)[1]
+    assert time.perf_counter() - start < 5.0
+    assert process.returncode == 130 and "interrupted" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []

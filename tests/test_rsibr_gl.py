@@ -69,7 +69,7 @@ def test_sphere_under_a_constant_environment_is_that_constant(gl_ctx, brdf, para
     session.release()
 
 
-def test_bakes_are_cached_and_a_refused_file_is_baked_again(gl_ctx):
+def test_bakes_are_cached_and_a_refused_file_is_baked_again(gl_ctx, capsys):
     session = _sphere_session(gl_ctx, (0.5, 0.5, 0.5))
     first = session.method("rsibr")
     first.values.update({"map_size": 16})
@@ -80,13 +80,24 @@ def test_bakes_are_cached_and_a_refused_file_is_baked_again(gl_ctx):
     second.values.update(first.values.as_dict())
     session.render_offscreen(second, (32, 32))
     assert second.last_bake_seconds is None  # loaded from the cache
-    files[0].write_bytes(b"corrupt")
-    third = type(first)(gl_ctx, session.programs)
-    third.values.update(first.values.as_dict())
-    session.render_offscreen(third, (32, 32))
-    assert third.last_bake_seconds is not None
-    assert rb.load_bake(files[0], size=16).brdf == "phong"
-    for m in (first, second, third):
+    methods = [first, second]
+    corruptions = (
+        lambda p: p.write_bytes(b"corrupt"),
+        lambda p: p.write_bytes(b""),
+        lambda p: (p.unlink(), p.mkdir()),  # a folder where the entry was
+    )
+    for corrupt in corruptions:
+        corrupt(files[0])
+        capsys.readouterr()
+        again = type(first)(gl_ctx, session.programs)
+        again.values.update(first.values.as_dict())
+        session.render_offscreen(again, (32, 32))
+        assert again.last_bake_seconds is not None  # discarded with a note, baked again
+        notes = [line for line in capsys.readouterr().err.splitlines() if "discarded" in line]
+        assert len(notes) == 1 and files[0].name in notes[0]
+        assert rb.load_bake(files[0], size=16).brdf == "phong"
+        methods.append(again)
+    for m in methods:
         m.release()
     session.release()
 
