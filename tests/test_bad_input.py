@@ -133,6 +133,8 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         (["bake", "rsibr", "--env", STUDIO, "-o", "OUT.txt"], ["OUT.txt", ".rsibr file"]),
         (["bake", "pem", "--scene", "room", "-o", "OUT.txt"], ["OUT.txt", ".pem file"]),
         (["sh", "--env", STUDIO, "--max-env-width", "4"], ["--max-env-width 4", "at least 8"]),
+        (["compare", "--methods", "mirror", "--ssaa", "0", "--out", "OUT.d"], ["--ssaa 0", "1..8"]),
+        (["compare", "--methods", "mirror", "--ssaa", "2.5", "--out", "OUT.d"], ["--ssaa", "2.5"]),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):

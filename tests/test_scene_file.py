@@ -170,3 +170,15 @@ def test_scene_files_are_checked_against_the_schema(tmp_path, parts, fragments):
     assert "\n" not in message and message.startswith(f"{path}: ")
     for fragment in fragments:
         assert fragment in message, message
+
+
+def test_a_scene_with_its_environment_or_reflector_replaced_is_named_so():
+    """compare's title and compare.json name what was compared, not the scene file alone."""
+    from envstudio.io.scene_setup import build_scene
+    from envstudio.resources import asset_root
+
+    env, mesh = asset_root() / "hdr" / "studio.exr", asset_root() / "mesh" / "bunny.ply"
+    assert build_scene("studio").label == "studio"
+    assert build_scene("room", env).label == "room with env studio.exr"
+    assert build_scene("studio", env, mesh).label == "studio with env studio.exr, mesh bunny.ply"
+    assert build_scene("room", env).name == "room"  # bakes and files keep keying on the name

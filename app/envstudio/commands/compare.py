@@ -15,6 +15,10 @@ from envstudio.commands.common import (
 from envstudio.errors import ParameterError
 from envstudio.render.hooks import Command
 
+#: Samples per axis ``--ssaa`` may ask for, and the largest supersampled frame edge.
+MAX_SSAA = 8
+MAX_SSAA_EDGE = 8192
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Methods, scene, camera, size, parameters, stopping, timing, output, cache."""
@@ -38,6 +42,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--param tolerance=... is strict too)",
     )
     add_time_limit_option(parser, "stop the reference after")
+    parser.add_argument(
+        "--ssaa",
+        type=int,
+        default=4,
+        metavar="K",
+        help="render each method at KxK samples per pixel, box-filtered, as the reference "
+        "averages each pixel's footprint (default 4; 1: pixel centres; time is still per "
+        "one-sample frame)",
+    )
     parser.add_argument("--frames", type=int, default=20, help="timed frames per method")
     parser.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
     parser.add_argument("--out", required=True, help="folder for the images, table and index.html")
@@ -68,6 +81,11 @@ def run(args: argparse.Namespace) -> int:
     if args.frames < 1 or args.warmup < 0:
         raise ParameterError("--frames must be >= 1 and --warmup >= 0")
     time_limit = parse_time_limit(args.time_limit)
+    if not 1 <= args.ssaa <= MAX_SSAA or args.ssaa * max(size) > MAX_SSAA_EDGE:
+        raise ParameterError(
+            f"--ssaa {args.ssaa}: expected an integer in 1..{MAX_SSAA} with "
+            f"{args.ssaa} x {max(size)} <= {MAX_SSAA_EDGE} pixels"
+        )
     out = check_output_folder(args.out)
     if args.camera:
         parse_camera(args.camera)
@@ -85,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
             strict=args.strict,
             time_limit_s=time_limit,
             extras_dir=out,
+            ssaa=args.ssaa,
         )
     finally:
         session.release()

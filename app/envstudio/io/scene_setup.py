@@ -38,6 +38,8 @@ def build_scene(
         result.nodes = [
             *replace_reflector(result, load_mesh(mesh).fitted(1.0)),
         ]
+    replaced = [f"{what} {Path(p).name}" for what, p in (("env", env), ("mesh", mesh)) if p]
+    result.variant = ", ".join(replaced)
     return result
 
 

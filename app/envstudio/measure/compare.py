@@ -72,6 +72,7 @@ from envstudio.measure.stopping import (
     median_error,
 )
 from envstudio.render.display import DISPLAY_PARAMETERS
+from envstudio.render.images import displayed
 from envstudio.render.method import Method, ReportExtra
 from envstudio.render.registry import ground_truth_class, method_class
 from envstudio.render.session import RenderSession
@@ -270,6 +271,8 @@ class Comparison:
     extras : dict
         Method name → the sections it adds to the report (:meth:`Method.report_extras`;
         only methods that add some).
+    ssaa : int
+        Samples per pixel each method was box-filtered from, per axis (1: pixel centres).
     """
 
     scene: str
@@ -281,6 +284,7 @@ class Comparison:
     reference: ReferenceRun
     results: list[MethodResult]
     extras: dict[str, list[ReportExtra]] = field(default_factory=dict)
+    ssaa: int = 1
 
     @property
     def reliable(self) -> bool:
@@ -349,6 +353,7 @@ def run_comparison(
     strict: bool = False,
     time_limit_s: float | None = None,
     extras_dir: Path | None = None,
+    ssaa: int = 1,
 ) -> Comparison:
     """Render ``names`` and the reference at the session's camera and compare them.
 
@@ -377,6 +382,10 @@ def run_comparison(
         The report's folder (made if missing): each compared method's
         :meth:`Method.report_extras` runs after the measurements and writes its
         images there. None: no extras.
+    ssaa
+        Render each method at ``ssaa`` × ``ssaa`` samples per pixel and box-filter
+        them, as the reference averages each pixel's footprint (1: the pixel centre).
+        Its time per frame is still taken at one sample per pixel, as a user's frame.
 
     Raises
     ------
@@ -391,7 +400,7 @@ def run_comparison(
     if time_limit_s is not None:
         reference.values["time_limit"] = time_limit_s
     rendered = {
-        name: _render_method(session, name, plan.methods[name], reference, size)
+        name: _render_method(session, name, plan.methods[name], reference, size, ssaa)
         for name in names
         if name != truth
     }
@@ -429,7 +438,7 @@ def run_comparison(
     extras = _report_extras(session, list(rendered), extras_dir)
     camera = session.camera
     return Comparison(
-        scene=session.scene.name,
+        scene=session.scene.label,
         size=tuple(size),
         camera=(camera.azimuth, camera.elevation, camera.distance),
         display=session.renderer.display.as_dict(),
@@ -438,6 +447,7 @@ def run_comparison(
         reference=ref_run,
         results=results,
         extras=extras,
+        ssaa=ssaa,
     )
 
 
@@ -459,24 +469,61 @@ def _render_method(
     values: dict[str, object],
     reference: GroundTruth,
     size: tuple[int, int],
+    ssaa: int = 1,
 ) -> tuple[Method, str | None, npt.NDArray[np.float32], npt.NDArray[np.float32]]:
     """Render method ``name`` with ``values`` until finished, glossiness matched to ``reference``.
+
+    With ``ssaa`` > 1 the frame is rendered at ``ssaa`` times the size and filtered in
+    linear radiance over each pixel's footprint as the reference is (:func:`footprint_filter`).
 
     Returns
     -------
     tuple
         The method, how its ``lod_bias`` was matched (or None), its linear HDR
-        frame and its display image.
+        frame (h, w, 3) and its display image.
     """
     method = session.method(name)
     method.values.update(values)
     glossiness = None
     if "lod_bias" not in values:
         glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
-    session.render_offscreen(method, size)
+    fine = (size[0] * ssaa, size[1] * ssaa)
+    session.render_offscreen(method, fine)
     while not method.finished():
-        session.render_offscreen(method, size)
-    return method, glossiness, session.read_hdr(), _display_image(session, size)
+        session.render_offscreen(method, fine)
+    hdr = session.read_hdr()
+    if ssaa > 1:
+        covered = session.renderer.reflector_coverage(session.gpu_scene, session.camera, fine)
+        hdr = footprint_filter(hdr, covered, ssaa)
+    return method, glossiness, hdr, _display_image(session, hdr)
+
+
+def footprint_filter(
+    image: npt.NDArray[np.float32], covered: npt.NDArray[np.bool_], factor: int
+) -> npt.NDArray[np.float32]:
+    """(h·factor, w·factor, 3) samples → (h, w, 3) pixels, as the reference filters a footprint.
+
+    A pixel that a reflector covers in part is the mean of its samples on the reflector
+    (the reference drops the footprint samples that miss the reflectors); one it does not
+    cover is the mean of all its samples.
+
+    Parameters
+    ----------
+    image : (h·factor, w·factor, 3) float32
+        Linear radiance, one sample per fine pixel.
+    covered : (h·factor, w·factor) bool
+        Samples on a reflector.
+    factor : int
+        Samples per pixel along each axis.
+    """
+    if factor == 1:
+        return image
+    h, w = image.shape[0] // factor, image.shape[1] // factor
+    blocks = image.reshape(h, factor, w, factor, -1).astype(np.float64)
+    weights = covered.reshape(h, factor, w, factor, 1).astype(np.float64)
+    count = weights.sum(axis=(1, 3))
+    on = (blocks * weights).sum(axis=(1, 3)) / np.maximum(count, 1.0)
+    return np.where(count > 0, on, blocks.mean(axis=(1, 3))).astype(np.float32)
 
 
 def _judge(
@@ -547,6 +594,7 @@ def _converge(
     stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
     noise = reference.relative_standard_error()
     print(f"reference: {_stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
+    hdr = session.read_hdr()
     run = ReferenceRun(
         parameters=reference.values.as_dict(),
         status=replace(reference.status),
@@ -554,8 +602,8 @@ def _converge(
         total_s=sum(frames_ms) / 1e3,
         relative_standard_error=noise,
         resumed_samples=resumed,
-        hdr=session.read_hdr(),
-        display=_display_image(session, size),
+        hdr=hdr,
+        display=_display_image(session, hdr),
         stopping_rule=judge.rule,
         stopped_by=stopped_by,
         wall_s=wall_s,
@@ -629,15 +677,8 @@ def _summary(samples: list[float]) -> dict[str, float]:
     return {"median_ms": float(np.median(values)), "p95_ms": float(np.percentile(values, 95))}
 
 
-def _display_image(session: RenderSession, size: tuple[int, int]) -> npt.NDArray[np.float32]:
-    """(h, w, 3) float32 of the last frame through the display shader, unquantised, in [0, 1]."""
-    texture = session.ctx.texture(size, 4, dtype="f4")
-    target = session.ctx.framebuffer([texture])
-    try:
-        session.renderer.present(target, (0, 0, *size))
-        data = np.frombuffer(target.read(components=3, dtype="f4"), dtype=np.float32)
-    finally:
-        target.release()
-        texture.release()
-    w, h = size
-    return np.clip(data.reshape(h, w, 3)[::-1], 0.0, 1.0)
+def _display_image(session: RenderSession, hdr: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+    """(h, w, 3) float32 display values of linear ``hdr`` with the session's display settings
+    (render/images.py's twin of the display shader), unquantised, in [0, 1]."""
+    display = session.renderer.display
+    return displayed(hdr, float(display["exposure"]), str(display["tonemap"])).astype(np.float32)

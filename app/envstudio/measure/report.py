@@ -145,6 +145,8 @@ def format_table(comparison: Comparison) -> str:
         f"{display['exposure']:g} EV, tone map {display['tonemap']}; "
         f"{int(comparison.mask.sum())} reflector pixels; {comparison.device}",
         "",
+        f"methods: {_ssaa_text(comparison.ssaa)}",
+        "",
         f"reference: {_reference_line(comparison)}",
         "",
         "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | matched parameters |",
@@ -198,6 +200,7 @@ def to_json(comparison: Comparison) -> dict:
         "camera": {"azimuth": az, "elevation": el, "distance": dist},
         "display": comparison.display,
         "device": comparison.device,
+        "ssaa": comparison.ssaa,
         "mask_pixels": int(comparison.mask.sum()),
         "reliable": comparison.reliable,
         "unreliable_reason": None if comparison.reliable else ref.unreliable_reason,
@@ -378,6 +381,16 @@ def _reference_line(comparison: Comparison) -> str:
         f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: {STOPPED_BY[ref.stopped_by]}; "
         f"noise (median relative standard error) {_percent(ref.relative_standard_error)}; {half} "
         f"(tolerance {100 * float(ref.parameters['tolerance']):.3g} %, {budget}): {state}"
+    )
+
+
+def _ssaa_text(ssaa: int) -> str:
+    """How the methods' pixels were sampled, beside the reference's footprint average."""
+    if ssaa == 1:
+        return "one sample at each pixel's centre (the reference averages the footprint)"
+    return (
+        f"{ssaa}×{ssaa} samples per pixel, box-filtered, as the reference averages each "
+        "pixel's footprint (ms/frame at one sample per pixel)"
     )
 
 

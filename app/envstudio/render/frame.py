@@ -147,6 +147,32 @@ class FrameRenderer:
         h, w = self._hdr.height, self._hdr.width
         return np.ascontiguousarray(data.reshape(h, w, 4)[::-1, :, :3])
 
+    def reflector_coverage(
+        self, scene: GpuScene, camera: OrbitCamera, size: tuple[int, int]
+    ) -> npt.NDArray[np.bool_]:
+        """(h, w) bool, row 0 at the top: the pixels whose nearest surface is a reflector.
+
+        What the reference's footprint average keeps (its samples that miss the
+        reflectors are dropped); ``compare`` box-filters a supersampled method over it.
+        Uses the HDR target of ``size`` (its content is replaced).
+        """
+        self._ensure_target(size)
+        self._fbo.use()
+        self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        view, projection = camera.view_matrix(), camera.projection_matrix(size[0] / size[1])
+        program = self.programs.get("frame/coverage.glsl")
+        set_uniform(program, "u_view", view)
+        set_uniform(program, "u_projection", projection)
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self.ctx.disable(moderngl.BLEND | moderngl.CULL_FACE)
+        for value, nodes in ((0.0, scene.local_objects()), (1.0, scene.reflectors())):
+            set_uniform(program, "u_value", value)
+            for gpu_node in nodes:
+                set_uniform(program, "u_model", gpu_node.model)
+                set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                gpu_node.mesh.render(program)
+        return self.read_hdr()[..., 0] > 0.5
+
     def _draw_background(self, scene: GpuScene, view, projection) -> None:
         program = self.programs.get("frame/background.glsl")
         rotation_only = view.copy()

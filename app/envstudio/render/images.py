@@ -13,8 +13,10 @@ import numpy.typing as npt
 GAP = 2
 
 
-def to_ldr(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -> np.ndarray:
-    """Linear radiance as displayed: exposure, the tone map, sRGB, 8 bits.
+def displayed(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -> np.ndarray:
+    """Linear radiance as displayed, unquantised: exposure, the tone map, sRGB encoding.
+
+    The CPU twin of shaders/frame/display.glsl (and common/tonemap.glsl's curves).
 
     Parameters
     ----------
@@ -23,11 +25,12 @@ def to_ldr(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -
     exposure
         Stops.
     tonemap
-        ``none``, ``reinhard`` or ``aces`` (shaders/common/tonemap.glsl's curves).
+        ``none``, ``reinhard`` or ``aces``.
 
     Returns
     -------
-    (..., 3) uint8
+    (..., 3) float64
+        Display values in [0, 1].
     """
     c = np.asarray(image, dtype=np.float64) * 2.0**exposure
     if tonemap == "reinhard":
@@ -35,8 +38,12 @@ def to_ldr(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -
     elif tonemap == "aces":
         c = (c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14)
     c = np.clip(c, 0.0, 1.0)
-    c = np.where(c < 0.0031308, 12.92 * c, 1.055 * c ** (1.0 / 2.4) - 0.055)
-    return np.round(255.0 * np.clip(c, 0.0, 1.0)).astype(np.uint8)
+    return np.where(c < 0.0031308, 12.92 * c, 1.055 * c ** (1.0 / 2.4) - 0.055)
+
+
+def to_ldr(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -> np.ndarray:
+    """Linear radiance as displayed (:func:`displayed`) in 8 bits: (..., 3) uint8."""
+    return np.round(255.0 * displayed(image, exposure, tonemap)).astype(np.uint8)
 
 
 def upright(image: npt.ArrayLike, scale: int = 1) -> np.ndarray:

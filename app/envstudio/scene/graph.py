@@ -56,6 +56,13 @@ class Scene:
     nodes: list[Node]
     camera: OrbitCamera = field(default_factory=OrbitCamera)
     name: str = "scene"
+    #: What replaced the scene file's own environment or reflector ("" when nothing did).
+    variant: str = ""
+
+    @property
+    def label(self) -> str:
+        """The scene as a report names it: its name, and what replaced parts of it."""
+        return f"{self.name} with {self.variant}" if self.variant else self.name
 
     def reflectors(self) -> list[Node]:
         """Nodes drawn by the selected method."""
