@@ -465,3 +465,27 @@ def test_the_footprint_filter_keeps_the_covered_samples_as_the_reference_does():
     np.testing.assert_allclose(out[0, 1], [2.0, 2.0, 2.0])
     np.testing.assert_allclose(out[1], 0.0)
     assert footprint_filter(image, covered, 1) is image
+
+
+def test_each_method_is_measured_against_a_reference_of_its_own_reflectance_model(
+    small_scene, tmp_path, capsys
+):
+    """mirror renders the Phong model, banks the Banks BRDF: two references, each row says which,
+    and banks' reference takes its material from banks (sharpness, tangents)."""
+    out = tmp_path / "cmp"
+    args = ["--methods", "mirror,banks", "--param", "max_samples=32", "--param", "sharpness=0.8"]
+    assert compare(small_scene, out, *args, "--ssaa", "1") == 0
+    report = json.loads((out / "compare.json").read_text())
+    assert list(report["references"]) == ["phong", "banks"]
+    assert report["references"]["banks"]["parameters"]["model"] == "banks"
+    assert report["references"]["banks"]["parameters"]["sharpness"] == 0.8
+    assert report["reference"]["parameters"]["model"] == "phong"
+    assert report["methods"]["mirror"]["reference_model"] == "phong"
+    assert report["methods"]["banks"]["reference_model"] == "banks"
+    assert (out / "reference-banks.exr").is_file() and (out / "reference.exr").is_file()
+    assert "| banks |" in (out / "compare.md").read_text()
+    capsys.readouterr()
+    assert compare(small_scene, tmp_path / "strict", *args, "--strict") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--strict: these methods need 2 references" in err[0]
+    assert not (tmp_path / "strict").exists()

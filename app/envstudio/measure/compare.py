@@ -231,6 +231,9 @@ class MethodResult:
         Linear radiance of the frame.
     display : (h, w, 3) float32
         The frame as displayed, in [0, 1].
+    reference_model : str or None
+        The reflectance model of the reference it was measured against (None: the
+        ground truth renders no reference of its model, and it has no numbers).
     """
 
     name: str
@@ -245,6 +248,7 @@ class MethodResult:
     display: npt.NDArray[np.float32]
     median_relative_error: float = float("nan")
     reliable: bool = True
+    reference_model: str | None = None
 
 
 @dataclass
@@ -273,6 +277,9 @@ class Comparison:
         only methods that add some).
     ssaa : int
         Samples per pixel each method was box-filtered from, per axis (1: pixel centres).
+    references : dict
+        Reflectance model → its reference (``reference`` is the first), one per model of
+        the methods compared.
     """
 
     scene: str
@@ -285,6 +292,7 @@ class Comparison:
     results: list[MethodResult]
     extras: dict[str, list[ReportExtra]] = field(default_factory=dict)
     ssaa: int = 1
+    references: dict[str, ReferenceRun] = field(default_factory=dict)
 
     @property
     def reliable(self) -> bool:
@@ -394,19 +402,36 @@ def run_comparison(
     """
     for name, value in plan.display.items():
         session.renderer.display[name] = value
-    truth = ground_truth_class().name
+    truth_class = ground_truth_class()
+    truth = truth_class.name
     reference = session.method(truth)
     reference.values.update(plan.methods[truth])
     if time_limit_s is not None:
         reference.values["time_limit"] = time_limit_s
+    groups = reflectance_groups(names, str(reference.values["model"]))
+    if strict and len(groups) > 1:
+        raise ParameterError(
+            f"--strict: these methods need {len(groups)} references ("
+            + "; ".join(f"{model}: {', '.join(members)}" for model, members in groups.items())
+            + "); compare them one model at a time to stop each by its tolerance"
+        )
     rendered = {
         name: _render_method(session, name, plan.methods[name], reference, size, ssaa)
         for name in names
         if name != truth
     }
     rule = choose_rule(list(names), plan.methods[truth], strict)
-    judge = ReferenceJudge(rule, {name: frame[2] for name, frame in rendered.items()})
-    ref_run, mask = _converge(session, reference, size, progress, cache, judge)
+    base = dict(reference.values.as_dict())
+    runs: dict[str, ReferenceRun] = {}
+    for model, members in groups.items():
+        reference.values.update(base)
+        reference.values.update(_reference_values(session, reference, model, members, base))
+        judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
+        runs[model], mask = _converge(session, reference, size, progress, cache, judge)
+    first = next(iter(runs))
+    model_of = {name: model for model, members in groups.items() for name in members}
+    model_of[truth] = first
+    ref_run = runs[first]
     frames_of = {
         name: rendered.get(name, (reference, None, ref_run.hdr, ref_run.display)) for name in names
     }
@@ -415,26 +440,23 @@ def run_comparison(
         _summary(ref_run.frames_ms),
         "median of its accumulation frames",
     )
-    results = [
-        _judge(
-            MethodResult(
-                name=name,
-                parameters=method.values.as_dict(),
-                matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
-                glossiness=glossiness,
-                metrics=compare_images(display, ref_run.display, mask),
-                relative_error=relative_error(hdr, ref_run.hdr),
-                frame_ms=timings[name][0],
-                timing=timings[name][1],
-                hdr=hdr,
-                display=display,
-            ),
-            ref_run,
-            mask,
-            truth,
+    results = []
+    for name, (method, glossiness, hdr, display) in frames_of.items():
+        own = runs.get(model_of.get(name, ""))
+        result = MethodResult(
+            name=name,
+            parameters=method.values.as_dict(),
+            matched={n: method.values[n] for n in MATCHED_NAMES if n in method.values},
+            glossiness=glossiness,
+            metrics=compare_images(display, (own or ref_run).display, mask),
+            relative_error=relative_error(hdr, (own or ref_run).hdr),
+            frame_ms=timings[name][0],
+            timing=timings[name][1],
+            hdr=hdr,
+            display=display,
+            reference_model=model_of.get(name),
         )
-        for name, (method, glossiness, hdr, display) in frames_of.items()
-    ]
+        results.append(_judge(result, own, mask, truth) if own else _without_truth(result))
     extras = _report_extras(session, list(rendered), extras_dir)
     camera = session.camera
     return Comparison(
@@ -448,7 +470,47 @@ def run_comparison(
         results=results,
         extras=extras,
         ssaa=ssaa,
+        references=runs,
     )
+
+
+def reflectance_groups(names: Sequence[str], base_model: str) -> dict[str, list[str]]:
+    """Model → the methods of ``names`` that render it and that the ground truth can render.
+
+    The ground truth's own model (``base_model``: the scene's, or ``--param model``) comes
+    first; a comparison of the ground truth alone is that model's group, empty.
+    """
+    truth = ground_truth_class()
+    groups: dict[str, list[str]] = {base_model: []}
+    for name in names:
+        cls = method_class(name)
+        if name != truth.name and cls.reflectance in truth.models:
+            groups.setdefault(cls.reflectance, []).append(name)
+    if not groups[base_model] and len(groups) > 1 and truth.name not in names:
+        del groups[base_model]
+    return groups
+
+
+def _reference_values(
+    session: RenderSession, reference: Method, model: str, members: list[str], base: dict
+) -> dict[str, object]:
+    """The ground truth's values for ``model``: the model, and for a model other than its own
+    the material parameters it shares with the group's first method (its paper's material)."""
+    values: dict[str, object] = {"model": model}
+    if model == base["model"] or not members:
+        return values
+    method = session.method(members[0])
+    shared = [p.name for p in method.values if p.name in reference.values and p.name != "model"]
+    return values | {name: method.values[name] for name in shared}
+
+
+def _without_truth(result: MethodResult) -> MethodResult:
+    """A method whose reflectance model the ground truth cannot render: no numbers."""
+    nan = float("nan")
+    result.metrics = ImageMetrics(nan, nan, nan, np.zeros_like(result.metrics.flip_map))
+    result.relative_error = np.zeros_like(result.relative_error)
+    result.reliable = False
+    return result
 
 
 def _report_extras(

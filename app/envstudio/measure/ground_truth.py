@@ -99,6 +99,8 @@ class GroundTruth(Protocol):
     """
 
     name: str
+    #: The reflectance models its ``model`` parameter renders.
+    models: tuple[str, ...]
     values: ParameterValues
     status: ConvergenceStatus
 

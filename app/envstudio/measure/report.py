@@ -43,7 +43,7 @@ from envstudio.core.colormap import MAGMA_STOPS, magma
 from envstudio.core.env_sampling import LUMINANCE
 from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
-from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult
+from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult, ReferenceRun
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
 from envstudio.render.method import ReportExtra
 from envstudio.render.registry import ground_truth_class
@@ -76,16 +76,17 @@ def write_report(comparison: Comparison, folder: str | os.PathLike) -> list[Path
     """
     folder = check_output_folder(folder)
     folder.mkdir(exist_ok=True)
-    reference = comparison.reference
-    written = [
-        write_image(folder / "reference.exr", reference.hdr),
-        write_image(folder / "reference.png", reference.display),
-    ]
+    written = []
+    for model, run in _references(comparison).items():
+        files = _reference_files(comparison, model)
+        written.append(write_image(folder / files["exr"], run.hdr))
+        written.append(write_image(folder / files["png"], run.display))
     for result in comparison.results:
         files = _files(result.name)
         if result.name != ground_truth_class().name:
             written.append(write_image(folder / files["exr"], result.hdr))
             written.append(write_image(folder / files["png"], result.display))
+        reference = _references(comparison).get(result.reference_model, comparison.reference)
         context = CONTEXT_BRIGHTNESS * (reference.display @ LUMINANCE)
         written.append(
             write_image(
@@ -149,16 +150,22 @@ def format_table(comparison: Comparison) -> str:
         "",
         f"reference: {_reference_line(comparison)}",
         "",
-        "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | matched parameters |",
-        "|:--|--:|--:|--:|--:|:--|:--|",
+        *(
+            f"reference ({model}): {_run_line(run)}\n"
+            for model, run in list(_references(comparison).items())[1:]
+        ),
+        "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | reference | "
+        "matched parameters |",
+        "|:--|--:|--:|--:|--:|:--|:--|:--|",
     ]
     for result in comparison.results:
         m = result.metrics
         mark = "" if result.reliable else UNRELIABLE
         lines.append(
-            f"| {result.name} | {_psnr_text(m.psnr_db)}{mark} | {m.ssim:.4f}{mark} | "
-            f"{m.flip:.4f}{mark} | {result.frame_ms['median_ms']:.2f} | "
-            f"{'yes' if result.reliable else 'no'} | {_matched_text(result)} |"
+            f"| {result.name} | {_psnr_text(m.psnr_db)}{mark} | {_fixed(m.ssim)}{mark} | "
+            f"{_fixed(m.flip)}{mark} | {result.frame_ms['median_ms']:.2f} | "
+            f"{'yes' if result.reliable else 'no'} | {_model_text(result)} | "
+            f"{_matched_text(result)} |"
         )
     lines.append("")
     if not comparison.reliable:
@@ -220,14 +227,26 @@ def to_json(comparison: Comparison) -> dict:
             "resumed_samples": ref.resumed_samples,
             "files": {"exr": "reference.exr", "png": "reference.png"},
         },
+        "references": {
+            model: {
+                "model": run.parameters.get("model"),
+                "parameters": run.parameters,
+                "samples": run.status.samples,
+                "converged": run.status.converged,
+                "relative_standard_error": _number(run.relative_standard_error),
+                "files": _reference_files(comparison, model),
+            }
+            for model, run in _references(comparison).items()
+        },
         "methods": {
             r.name: {
                 "parameters": r.parameters,
                 "matched": r.matched,
                 "glossiness": r.glossiness,
                 "psnr_db": _number(r.metrics.psnr_db),
-                "ssim": r.metrics.ssim,
-                "flip": r.metrics.flip,
+                "ssim": _number(r.metrics.ssim),
+                "flip": _number(r.metrics.flip),
+                "reference_model": r.reference_model,
                 "reliable": r.reliable,
                 "median_relative_error": _number(r.median_relative_error),
                 "frame_ms": r.frame_ms,
@@ -254,10 +273,12 @@ def to_html(comparison: Comparison) -> str:
     rows = []
     for r in comparison.results:
         files = _files(r.name)
+        model = r.reference_model if r.reference_model in comparison.references else ""
+        reference_png = _reference_files(comparison, model or next(iter(_references(comparison))))
         rows.append(
-            _card("reference", "reference.png", "")
+            _card(f"reference {model}".strip(), reference_png["png"], "")
             + _card(r.name, files["png"], f"PSNR {_psnr_text(r.metrics.psnr_db)} dB")
-            + _card(f"{r.name}: FLIP", files["flip"], f"mean {r.metrics.flip:.4f}")
+            + _card(f"{r.name}: FLIP", files["flip"], f"mean {_fixed(r.metrics.flip)}")
             + _card(f"{r.name}: relative error", files["relerr"], f"scale 0–{HEAT_SCALE:g}")
         )
     warning = (
@@ -310,16 +331,26 @@ def _html_table(comparison: Comparison) -> str:
         cells = [
             f"<td>{html.escape(r.name)}</td>",
             f'<td class="n">{_psnr_text(m.psnr_db)}{mark}</td>',
-            f'<td class="n">{m.ssim:.4f}{mark}</td>',
-            f'<td class="n">{m.flip:.4f}{mark}</td>',
+            f'<td class="n">{_fixed(m.ssim)}{mark}</td>',
+            f'<td class="n">{_fixed(m.flip)}{mark}</td>',
             f'<td class="n">{r.frame_ms["median_ms"]:.2f}</td>',
             f"<td>{'yes' if r.reliable else 'no'}</td>",
+            f"<td>{html.escape(_model_text(r))}</td>",
             f"<td>{html.escape(_matched_text(r))}</td>",
         ]
         rows.append(f"<tr>{''.join(cells)}</tr>")
     head = "".join(
         f"<th>{c}</th>"
-        for c in ("method", "PSNR (dB)", "SSIM", "FLIP", "ms/frame", "reliable", "matched")
+        for c in (
+            "method",
+            "PSNR (dB)",
+            "SSIM",
+            "FLIP",
+            "ms/frame",
+            "reliable",
+            "reference",
+            "matched",
+        )
     )
     return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
 
@@ -367,8 +398,12 @@ def _card(title: str, image: str, caption: str) -> str:
 
 
 def _reference_line(comparison: Comparison) -> str:
+    """The first reference: samples and time, stopping rule, noise, half-change."""
+    return _run_line(comparison.reference)
+
+
+def _run_line(ref: ReferenceRun) -> str:
     """Samples and time, the stopping rule and what stopped it, the noise, the half-change."""
-    ref = comparison.reference
     change = ref.status.rms_change
     state = "converged" if ref.converged else "NOT converged"
     half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
@@ -414,11 +449,37 @@ def _value_text(value: object) -> str:
 
 
 def _psnr_text(value: float) -> str:
+    if math.isnan(value):
+        return "—"
     return "∞" if math.isinf(value) else f"{value:.2f}"
 
 
-def _number(value: float) -> float | str:
-    """A float, or ``"inf"`` for +infinity (JSON has none)."""
+def _fixed(value: float) -> str:
+    """A metric to four places, or a dash for none."""
+    return "—" if math.isnan(value) else f"{value:.4f}"
+
+
+def _model_text(result: MethodResult) -> str:
+    """The reference a row was measured against, or why it has no numbers."""
+    return result.reference_model or "no ground truth for this model"
+
+
+def _references(comparison: Comparison) -> dict[str, ReferenceRun]:
+    """Model → reference run, the first being ``comparison.reference``."""
+    return comparison.references or {"": comparison.reference}
+
+
+def _reference_files(comparison: Comparison, model: str) -> dict[str, str]:
+    """``reference.exr``/``.png`` for the first reference, ``reference-<model>.*`` for others."""
+    first = next(iter(_references(comparison)))
+    stem = "reference" if model == first else f"reference-{model}"
+    return {"exr": f"{stem}.exr", "png": f"{stem}.png"}
+
+
+def _number(value: float) -> float | str | None:
+    """A float, ``"inf"`` for +infinity, None for no number (JSON has neither)."""
+    if math.isnan(value):
+        return None
     return "inf" if math.isinf(value) else value
 
 

@@ -86,6 +86,10 @@ class Method(ABC):
     title: ClassVar[str]
     summary: ClassVar[str]
     parameters: ClassVar[tuple[Parameter, ...]] = ()
+    #: The reflectance model it renders: ``compare`` measures it against a reference of the
+    #: same model (``phong``: diffuse + the Phong lobe with Schlick Fresnel; ``banks``;
+    #: ``microfacet``); a model the ground truth cannot render gets no numbers.
+    reflectance: ClassVar[str] = "phong"
     #: The image builds up over frames (a frame is one batch of an accumulation).
     progressive: ClassVar[bool] = False
     #: Title of a collapsing section of the Method panel showing :meth:`panel_images`
@@ -158,5 +162,6 @@ class Method(ABC):
             "name": cls.name,
             "title": cls.title,
             "summary": cls.summary,
+            "reflectance": cls.reflectance,
             "parameters": [p.describe() for p in cls.parameters],
         }

@@ -41,6 +41,7 @@ class BanksMethod(Method):
     """Banks-model anisotropic 3D environment map (seed 004 §5.3)."""
 
     name = "banks"
+    reflectance = "banks"
     title = "Kautz et al. 2000 (anisotropic Banks map, 3D texture)"
     summary = (
         "3D map L_banks(t, ⟨v,t⟩) indexed by the tangent (front paraboloid, folded by "

@@ -125,6 +125,8 @@ class ReferenceMethod(Method):
     """Ground truth by progressive Monte Carlo integration of the rendering equation."""
 
     name = "reference"
+    #: The reflectance models it renders (``model``): a reference for methods of each.
+    models = MODELS
     title = "Reference (Monte Carlo)"
     summary = "Rendering equation per pixel by MIS importance sampling, accumulated to convergence."
     progressive = True
