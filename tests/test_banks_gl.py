@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from envstudio.core import banks
+from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.methods.banks.maps import MapSpec, build_cpu, read_map
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_bad_input import assert_one_line_error, run_cli
 from test_banks import brute_force, smooth_environment

@@ -3,7 +3,7 @@
 import json
 
 from envstudio.cli import main
-from envstudio.render.registry import available_methods
+from envstudio.engine.registry import available_methods
 
 
 def test_bench_times_every_one_frame_method_unless_a_progressive_one_is_named(tmp_path):

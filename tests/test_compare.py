@@ -12,6 +12,8 @@ from envstudio.cli import main
 from envstudio.core.latlong import texel_directions
 from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
 from envstudio.core.parameters import Parameter
+from envstudio.engine.method import Method
+from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image, write_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.compare import footprint_filter, plan_parameters
@@ -26,8 +28,6 @@ from envstudio.measure.stopping import (
 from envstudio.methods.hwconv import method as hwconv_method
 from envstudio.methods.hwconv.accuracy import MODES, run_accuracy
 from envstudio.methods.reference.method import ReferenceMethod
-from envstudio.render.method import Method
-from envstudio.render.session import RenderSession
 
 FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
 

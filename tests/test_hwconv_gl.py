@@ -6,6 +6,7 @@ import pytest
 
 from envstudio.core import latlong
 from envstudio.core.colormap import magma
+from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.io.images import read_image
 from envstudio.methods.hwconv.accuracy import (
@@ -16,7 +17,6 @@ from envstudio.methods.hwconv.accuracy import (
     write_error_images,
 )
 from envstudio.prefilter.brute_force import phong
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_bad_input import assert_one_line_error, run_cli
 from test_render_gl import render, sphere_geometry, sphere_scene

@@ -12,6 +12,7 @@ from envstudio.core.env_sampling import luminance
 from envstudio.core.sh_bands import BAND_SETS, a_hat, band_indices, sh_basis
 from envstudio.core.sh_lights import DiffuseProjector
 from envstudio.core.transforms import normal_matrix, perspective, rotation_xyz, translation
+from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube, face_view
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, edge_jumps, mipmapped_cube
@@ -19,7 +20,6 @@ from envstudio.gpu.mesh import GpuMesh
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.kautz.method import STATIC_HEIGHT
 from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Transform
 from envstudio.scene.primitives import box

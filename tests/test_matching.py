@@ -3,14 +3,14 @@
 import pytest
 
 from envstudio.core.parameters import Parameter
+from envstudio.engine.method import Method
+from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
 from envstudio.measure.compare import plan_parameters, run_comparison
 from envstudio.measure.matching import match_glossiness
 from envstudio.methods.kautz.method import KautzMethod
 from envstudio.methods.reference.method import ReferenceMethod
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
-from envstudio.render.method import Method
-from envstudio.render.session import RenderSession
 
 
 class _Bias(Method):

@@ -69,9 +69,9 @@ import pytest
 
 import mitsuba_scene as ms
 from envstudio.core import latlong
+from envstudio.engine.session import RenderSession
 from envstudio.io.meshes import load_mesh
 from envstudio.methods.reference import tracing
-from envstudio.render.session import RenderSession
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment

@@ -3,8 +3,8 @@
 import pytest
 
 from envstudio.core.parameters import Parameter, ParameterValues, parse_assignments
+from envstudio.engine.registry import available_methods, method_class
 from envstudio.errors import ParameterError
-from envstudio.render.registry import available_methods, method_class
 
 
 def test_values_are_validated_and_converted():

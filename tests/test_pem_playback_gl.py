@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from envstudio.engine.session import RenderSession
 from envstudio.errors import InputFileError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.scene_file import load_scene
@@ -29,7 +30,6 @@ from envstudio.methods.pem.bake.mip import mip_sizes
 from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.methods.pem.method import shipped_bake
-from envstudio.render.session import RenderSession
 
 R, N = 48, 8
 LOD_BIAS = -1.0  # a bake's level bias (methods/pem/bake/lookups.py): the playback adds it too

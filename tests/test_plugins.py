@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.io.images import read_image
-from envstudio.render.registry import available_methods, ground_truth_class
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ["mirror", "rsibr", "hwconv", "banks", "pem", "kautz", "reference"]

@@ -7,12 +7,12 @@ import os
 import numpy as np
 import pytest
 
+from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.ground_truth_cache import cache_limit_bytes, load_state, prune, save_state
 from envstudio.methods.reference import method as reference_method
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_render_gl import sphere_scene
 

@@ -5,10 +5,10 @@ import pytest
 
 from envstudio.core import latlong
 from envstudio.core.fresnel import schlick
+from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
 from envstudio.methods.reference.sample_allocation import MAX_MULTIPLIER
 from envstudio.prefilter import brute_force
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from test_render_gl import sphere_geometry, sphere_scene
 

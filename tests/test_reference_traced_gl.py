@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 import trimesh
 
+from envstudio.engine.session import RenderSession
 from envstudio.io.meshes import load_mesh
-from envstudio.render.session import RenderSession
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment

@@ -5,8 +5,8 @@ import pytest
 
 from envstudio.core.fresnel import schlick
 from envstudio.core.latlong import texel_directions
+from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene, shipped_scenes
-from envstudio.render.session import RenderSession
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene

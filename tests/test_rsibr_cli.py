@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from envstudio.cli import main
-from envstudio.render.registry import method_class
+from envstudio.engine.registry import method_class
 from envstudio.resources import asset_root
 from envstudio.ui.parameter_widgets import clamp_note
 

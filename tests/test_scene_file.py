@@ -5,9 +5,9 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
+from envstudio.engine.session import material_values
 from envstudio.errors import InputFileError
 from envstudio.io.scene_file import MODELS, load_scene, shipped_scenes
-from envstudio.render.session import material_values
 from envstudio.scene.tangents import TangentField
 
 SCENE = """[environment]

@@ -3,8 +3,8 @@
 import numpy as np
 
 from envstudio.core.colormap import magma
-from envstudio.render.session import RenderSession
-from envstudio.render.split_view import SplitSettings, SplitView
+from envstudio.engine.session import RenderSession
+from envstudio.engine.split_view import SplitSettings, SplitView
 from envstudio.scene.environment import Environment
 from test_render_gl import sphere_scene
 

@@ -9,12 +9,12 @@ from envstudio.core import cubemap
 from envstudio.core.sh import irradiance_sh9
 from envstudio.core.sh_lights import DiffuseProjector
 from envstudio.core.transforms import normal_matrix, rotation_xyz, translation
+from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.io.scene_file import load_scene
 from envstudio.methods.kautz import method as kautz
-from envstudio.render.session import RenderSession
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.primitives import box, uv_sphere

@@ -8,13 +8,13 @@ import pytest
 from imgui_bundle import imgui
 
 from envstudio.core.parameters import ParameterValues
+from envstudio.engine.session import RenderSession
 from envstudio.measure import ground_truth_cache
 from envstudio.methods.reference.method import (
     SCHEDULING_PARAMETERS,
     ReferenceMethod,
     median_relative_error,
 )
-from envstudio.render.session import RenderSession
 from envstudio.scene.environment import Environment
 from envstudio.ui.parameter_widgets import parameter_widgets
 from envstudio.ui.status import StatusLine

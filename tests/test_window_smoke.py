@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 from imgui_bundle import imgui
 
+from envstudio.engine.registry import available_methods
+from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
-from envstudio.render.registry import available_methods
-from envstudio.render.session import RenderSession
 from envstudio.ui.app import CYCLE_FRAMES
 from envstudio.ui.panels import default_layout
 

@@ -1,7 +1,7 @@
 """The ``envstudio`` command: view (default), render, methods, bench, sh, figure, doctor, …
 
 The parser is built from :mod:`envstudio.commands` and the plugins' own commands
-(:mod:`envstudio.render.registry`). Usage errors print one line and exit with
+(:mod:`envstudio.engine.registry`). Usage errors print one line and exit with
 status 2; nothing prints a traceback for bad input.
 """
 
@@ -27,7 +27,7 @@ class _Parser(argparse.ArgumentParser):
 def _commands():
     """Every subcommand: envmap-studio's, then the plugins' (a name taken is left out)."""
     from envstudio.commands import builtin_commands
-    from envstudio.render.registry import registry
+    from envstudio.engine.registry import registry
 
     commands = builtin_commands()
     taken = {command.name for command in commands}

@@ -19,18 +19,18 @@ module and register the same way (its ``pyproject.toml``); the walk-through is
 """
 
 from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.engine.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
+from envstudio.engine.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
+from envstudio.engine.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
+from envstudio.engine.images import tile, to_ldr, upright
+from envstudio.engine.method import Method, ReportExtra
+from envstudio.engine.protocols import Session
 from envstudio.errors import InputFileError, ParameterError, UserError
 from envstudio.gpu.programs import ShaderCompileError, read_shader
 from envstudio.gpu.timers import PassTimer
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.io.images import write_image
 from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
-from envstudio.render.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
-from envstudio.render.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
-from envstudio.render.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
-from envstudio.render.images import tile, to_ldr, upright
-from envstudio.render.method import Method, ReportExtra
-from envstudio.render.protocols import Session
 
 __all__ = [
     "EQ8_PARAMETERS",

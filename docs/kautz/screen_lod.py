@@ -19,13 +19,13 @@ import argparse
 
 import numpy as np
 
+from envstudio.engine.gpu_scene import FrameInputs
+from envstudio.engine.method import Method
+from envstudio.engine.session import RenderSession
 from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import preprocess
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.io.scene_file import load_scene
-from envstudio.render.gpu_scene import FrameInputs
-from envstudio.render.method import Method
-from envstudio.render.session import RenderSession
 
 PROBE_NAME = "screen_lod_probe.glsl"
 PROBE = """#version 400 core

@@ -1,8 +1,8 @@
 """The subcommands, one module each; ``envstudio --help`` lists them in this order.
 
-Each module defines a :class:`~envstudio.render.hooks.Command` (the hook type a
+Each module defines a :class:`~envstudio.engine.hooks.Command` (the hook type a
 plugin's own subcommands use too). ``bake``, ``figure`` and ``bench`` take
-their kinds, names and tables from the plugins (:mod:`envstudio.render.registry`).
+their kinds, names and tables from the plugins (:mod:`envstudio.engine.registry`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from envstudio.commands import (
     sh,
     view,
 )
-from envstudio.render.hooks import Command
+from envstudio.engine.hooks import Command
 
 
 def builtin_commands() -> list[Command]:

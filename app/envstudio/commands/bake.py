@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 
 from envstudio.commands.common import add_param_option
-from envstudio.render.hooks import Command
-from envstudio.render.registry import registry
+from envstudio.engine.hooks import Command
+from envstudio.engine.registry import registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -9,9 +9,9 @@ import json
 import sys
 
 from envstudio.commands.common import add_param_option, add_scene_options, session_from_args
+from envstudio.engine.hooks import Command
+from envstudio.engine.registry import registry
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command
-from envstudio.render.registry import registry
 
 #: The most triangles ``--triangles`` asks for (about 2 GB of mesh while subdividing).
 MAX_TRIANGLES = 20_000_000
@@ -88,7 +88,7 @@ def default_bench_methods() -> list[str]:
     batch at 1280x720 takes seconds on a software renderer); name it with
     ``--methods`` to time its batches, or use ``bench --converge``.
     """
-    from envstudio.render.registry import available_methods
+    from envstudio.engine.registry import available_methods
 
     return [name for name, cls in available_methods().items() if not cls.progressive]
 
@@ -151,11 +151,11 @@ def _run_table(args: argparse.Namespace, size: tuple[int, int], owner: str, tabl
 
 def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
     """Median and p95 time per frame and per pass of each method."""
+    from envstudio.engine.display import DISPLAY_NAMES
+    from envstudio.engine.registry import method_class
     from envstudio.io.scene_setup import build_scene, subdivide_reflectors
     from envstudio.measure.bench import format_report
     from envstudio.measure.bench import run_bench as bench
-    from envstudio.render.display import DISPLAY_NAMES
-    from envstudio.render.registry import method_class
 
     names = default_bench_methods()
     if args.methods is not None:
@@ -191,8 +191,8 @@ def _run_methods(args: argparse.Namespace, size: tuple[int, int]) -> int:
 
 def _run_convergence(args: argparse.Namespace, size: tuple[int, int]) -> int:
     """``--converge``: the ground truth's time to its tolerance."""
+    from envstudio.engine.registry import ground_truth_class
     from envstudio.measure.convergence import format_convergence, run_convergence
-    from envstudio.render.registry import ground_truth_class
 
     truth = ground_truth_class().name
     if args.methods not in (None, truth):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
 from envstudio.errors import ParameterError
 
@@ -81,10 +80,10 @@ def parse_time_limit(text: str | None) -> float | None:
 
 
 def session_from_args(args: argparse.Namespace, scene=None):
-    """A :class:`~envstudio.render.session.RenderSession` of ``scene`` (default: the scene
+    """A :class:`~envstudio.engine.session.RenderSession` of ``scene`` (default: the scene
     options'), with ``--camera`` applied when the command has it."""
+    from envstudio.engine.session import RenderSession
     from envstudio.io.scene_setup import build_scene, parse_camera
-    from envstudio.render.session import RenderSession
 
     camera = parse_camera(args.camera) if getattr(args, "camera", None) else None
     session = RenderSession(
@@ -93,26 +92,3 @@ def session_from_args(args: argparse.Namespace, scene=None):
     if camera:
         session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
     return session
-
-
-def render_until_finished(session, method, size: tuple[int, int]):
-    """Render frames until the method is finished (one for one-shot methods), with progress."""
-    from tqdm import tqdm
-
-    stats = session.render_offscreen(method, size)
-    if method.finished():
-        return stats
-    with tqdm(
-        desc=method.name,
-        unit="frame",
-        file=sys.stderr,
-        disable=not sys.stderr.isatty(),
-        bar_format="{desc}: {n} frames {elapsed} {postfix}",
-    ) as bar:
-        while not method.finished():
-            stats = session.render_offscreen(method, size)
-            bar.update(1)
-            bar.set_postfix_str(method.status_line())
-    if method.status_line():
-        print(f"{method.name}: {method.status_line()}", file=sys.stderr)
-    return stats

@@ -12,8 +12,8 @@ from envstudio.commands.common import (
     parse_time_limit,
     session_from_args,
 )
+from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command
 
 #: Samples per axis ``--ssaa`` may ask for, and the largest supersampled frame edge.
 MAX_SSAA = 8

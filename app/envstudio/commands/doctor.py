@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from envstudio.render.hooks import Command
+from envstudio.engine.hooks import Command
 
 
 def run(args: argparse.Namespace) -> int:

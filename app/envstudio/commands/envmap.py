@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 
 from envstudio.commands.common import add_env_width_option
+from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -10,9 +10,9 @@ from envstudio.commands.common import (
     add_scene_options,
     session_from_args,
 )
+from envstudio.engine.hooks import Command, FigureRequest
+from envstudio.engine.registry import registry
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command, FigureRequest
-from envstudio.render.registry import registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

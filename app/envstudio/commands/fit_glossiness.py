@@ -6,8 +6,8 @@ import argparse
 import json
 import sys
 
+from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

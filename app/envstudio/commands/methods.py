@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from envstudio.render.hooks import Command
+from envstudio.engine.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -15,8 +15,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print every method and its parameters (name, type, range, default, unit, help)."""
-    from envstudio.render.display import DISPLAY_PARAMETERS
-    from envstudio.render.registry import available_methods
+    from envstudio.engine.display import DISPLAY_PARAMETERS
+    from envstudio.engine.registry import available_methods
 
     described = [cls.describe() for cls in available_methods().values()]
     if args.json:

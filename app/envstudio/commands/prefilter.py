@@ -16,13 +16,13 @@ import time
 import numpy as np
 
 from envstudio.commands.common import add_env_width_option
+from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path, write_text_atomic
 from envstudio.io.images import read_environment, write_image
 from envstudio.prefilter import brute_force, hierarchical, kernels
 from envstudio.prefilter.parallel import default_threads
 from envstudio.prefilter.targets import target_directions, target_picture, target_shape
-from envstudio.render.hooks import Command
 
 __all__ = [
     "COMMAND",

@@ -10,11 +10,11 @@ from envstudio.commands.common import (
     add_scene_options,
     add_time_limit_option,
     parse_time_limit,
-    render_until_finished,
     session_from_args,
 )
+from envstudio.engine.hooks import Command
+from envstudio.engine.session import render_until_finished
 from envstudio.errors import ParameterError
-from envstudio.render.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,10 +30,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Render until the method is finished, write the image, print one line."""
+    from envstudio.engine.registry import method_class
     from envstudio.io.atomic import check_output_path
     from envstudio.io.images import write_image
     from envstudio.io.scene_setup import parse_camera, parse_size
-    from envstudio.render.registry import method_class
 
     size = parse_size(args.size)
     output = check_output_path(args.output)

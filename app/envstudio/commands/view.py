@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from envstudio.commands.common import add_scene_options
+from envstudio.engine.hooks import Command
 from envstudio.errors import InputFileError, ParameterError
-from envstudio.render.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -14,9 +14,9 @@ import time
 import numpy as np
 from tqdm import tqdm
 
+from envstudio.engine.registry import available_methods
+from envstudio.engine.session import RenderSession
 from envstudio.gpu.context import describe
-from envstudio.render.registry import available_methods
-from envstudio.render.session import RenderSession
 
 
 def _summary(samples: list[float]) -> dict[str, float]:

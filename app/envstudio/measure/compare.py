@@ -56,6 +56,11 @@ from tqdm import tqdm
 
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.core.parameters import parse_assignments
+from envstudio.engine.display import DISPLAY_PARAMETERS
+from envstudio.engine.images import displayed
+from envstudio.engine.method import Method, ReportExtra
+from envstudio.engine.registry import ground_truth_class, method_class
+from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
@@ -71,11 +76,6 @@ from envstudio.measure.stopping import (
     duration,
     median_error,
 )
-from envstudio.render.display import DISPLAY_PARAMETERS
-from envstudio.render.images import displayed
-from envstudio.render.method import Method, ReportExtra
-from envstudio.render.registry import ground_truth_class, method_class
-from envstudio.render.session import RenderSession
 
 STOPPED_BY = {
     "reliable": "every method reliable",
@@ -741,6 +741,6 @@ def _summary(samples: list[float]) -> dict[str, float]:
 
 def _display_image(session: RenderSession, hdr: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
     """(h, w, 3) float32 display values of linear ``hdr`` with the session's display settings
-    (render/images.py's twin of the display shader), unquantised, in [0, 1]."""
+    (engine/images.py's twin of the display shader), unquantised, in [0, 1]."""
     display = session.renderer.display
     return displayed(hdr, float(display["exposure"]), str(display["tonemap"])).astype(np.float32)

@@ -17,10 +17,10 @@ import time
 
 from tqdm import tqdm
 
+from envstudio.engine.session import RenderSession
 from envstudio.gpu.context import describe
 from envstudio.measure.ground_truth import GroundTruth, project_convergence
 from envstudio.measure.ground_truth_cache import Checkpoint
-from envstudio.render.session import RenderSession
 
 
 def run_convergence(

@@ -1,7 +1,7 @@
 """The ground truth's protocol and the arithmetic of a progressive estimate.
 
 ``compare`` and ``bench --converge`` measure against one method, the plugin
-declared ``ground_truth`` (:func:`envstudio.render.registry.ground_truth_class`,
+declared ``ground_truth`` (:func:`envstudio.engine.registry.ground_truth_class`,
 the shipped ``reference``), through :class:`GroundTruth` alone. It accumulates
 batches, keeps a :class:`ConvergenceStatus`, checks its successive-half change
 at the batch counts :func:`is_checkpoint` picks, and its saved accumulations
@@ -94,7 +94,7 @@ class ConvergenceStatus:
 class GroundTruth(Protocol):
     """What ``compare``, its stopping rule and its cache use of the ground-truth method.
 
-    Besides the :class:`~envstudio.render.method.Method` contract: parameters
+    Besides the :class:`~envstudio.engine.method.Method` contract: parameters
     ``samples``, ``max_samples``, ``tolerance`` and ``time_limit``.
     """
 

@@ -35,11 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
+from envstudio.engine.protocols import Session
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_entries import discard
 from envstudio.measure.ground_truth import GroundTruth
-from envstudio.render.protocols import Session
 
 SAVE_INTERVAL_S = 60.0
 DEFAULT_LIMIT_MB = 2048.0

@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from envstudio.engine.method import Method
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
-from envstudio.render.method import Method
 
 SHARED = ("fresnel", "kd", "phong_exponent", "lod_bias")
 MATCH_LOD_MODE = "level"

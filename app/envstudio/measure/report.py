@@ -41,13 +41,13 @@ import numpy.typing as npt
 
 from envstudio.core.colormap import MAGMA_STOPS, magma
 from envstudio.core.env_sampling import LUMINANCE
+from envstudio.engine.method import ReportExtra
+from envstudio.engine.registry import ground_truth_class
+from envstudio.engine.split_view import SplitSettings
 from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
 from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult, ReferenceRun
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
-from envstudio.render.method import ReportExtra
-from envstudio.render.registry import ground_truth_class
-from envstudio.render.split_view import SplitSettings
 
 HEAT_SCALE = SplitSettings().heat_scale
 """Relative error at the top of the colour scale of ``*.relerr.png`` (the viewer's default)."""

@@ -35,8 +35,8 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.metrics import relative_error
+from envstudio.engine.registry import ground_truth_class
 from envstudio.measure.ground_truth import GroundTruth, duration, is_checkpoint
-from envstudio.render.registry import ground_truth_class
 
 NOISE_SHARE = 0.1
 """Largest ratio of reference noise to a method's error for its metrics to count as reliable."""

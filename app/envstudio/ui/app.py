@@ -32,6 +32,10 @@ from moderngl_window.context.base import BaseWindow, KeyModifiers
 from moderngl_window.timers.clock import Timer
 
 from envstudio.core.parameters import ParameterValues
+from envstudio.engine.method import Method
+from envstudio.engine.registry import available_methods, method_class
+from envstudio.engine.session import RenderSession
+from envstudio.engine.split_view import SplitView
 from envstudio.errors import ParameterError, UserError
 from envstudio.gpu.programs import ShaderCompileError
 from envstudio.io.atomic import check_output_path
@@ -40,10 +44,6 @@ from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
 from envstudio.io.scene_file import shipped_scenes
 from envstudio.io.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
 from envstudio.measure.matching import match_glossiness
-from envstudio.render.method import Method
-from envstudio.render.registry import available_methods, method_class
-from envstudio.render.session import RenderSession
-from envstudio.render.split_view import SplitView
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene
 from envstudio.ui.camera_control import CameraControl

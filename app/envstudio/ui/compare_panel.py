@@ -1,7 +1,7 @@
 """The Compare panel: split screen against another method and the error heat map.
 
 The state lives in :class:`CompareState`; the panel edits it in place and the
-app renders through :class:`envstudio.render.split_view.SplitView` while a
+app renders through :class:`envstudio.engine.split_view.SplitView` while a
 second method is chosen. The divider can be dragged in the 3D view.
 """
 
@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from imgui_bundle import imgui
 
 from envstudio.core.colormap import magma
-from envstudio.render.method import Method
-from envstudio.render.split_view import SplitSettings
+from envstudio.engine.method import Method
+from envstudio.engine.split_view import SplitSettings
 
 OFF = "off"
 """Combo entry for no comparison."""

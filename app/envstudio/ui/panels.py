@@ -23,9 +23,9 @@ from pathlib import Path
 from imgui_bundle import imgui, implot
 
 from envstudio.core.parameters import ParameterValues
+from envstudio.engine.method import Method
+from envstudio.engine.session import material_values
 from envstudio.errors import UserError
-from envstudio.render.method import Method
-from envstudio.render.session import material_values
 from envstudio.scene.graph import Scene
 from envstudio.ui.capture import FORMATS
 from envstudio.ui.file_dialogs import OpenFileDialog

@@ -14,12 +14,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from envstudio.engine.session import RenderSession
 from envstudio.errors import InputFileError
 from envstudio.io.images import HDR_SUFFIXES, read_environment
 from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
 from envstudio.io.scene_file import load_scene, shipped_environments, shipped_scenes
 from envstudio.io.scene_setup import DEFAULT_SCENE, replace_reflector
-from envstudio.render.session import RenderSession
 from envstudio.resources import asset_root
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node

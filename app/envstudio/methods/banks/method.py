@@ -23,14 +23,14 @@ import time
 
 import moderngl
 
+from envstudio.engine.materials import BANKS_MATERIAL_PARAMETERS
+from envstudio.engine.tangent_buffers import TangentBuffers
 from envstudio.envmap.conversions import read_cube
 from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.banks.maps import GpuMapBuilder, MapSpec, build_cpu, map_texture, upload
 from envstudio.plugin import EQ8_PARAMETERS, FrameInputs, Method, Parameter, set_eq8_uniforms
-from envstudio.render.materials import BANKS_MATERIAL_PARAMETERS
-from envstudio.render.tangent_buffers import TangentBuffers
 from envstudio.scene.tangents import TangentField
 
 VIEWS = ("reflector", "slice")

@@ -22,6 +22,7 @@ import moderngl
 import numpy as np
 
 from envstudio.core.cubemap import faces_to_cross
+from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
@@ -29,7 +30,6 @@ from envstudio.methods.pem.blending import ViewBlend, view_blend
 from envstudio.methods.pem.gpu import MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter, ReportExtra
-from envstudio.render.images import to_ldr, upright
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene

@@ -23,10 +23,10 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.metrics import compare_images
+from envstudio.engine.images import to_ldr
 from envstudio.methods.pem.bake.infer import psnr as linear_psnr
 from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.gpu import MODELS
-from envstudio.render.images import to_ldr
 from envstudio.scene.camera import OrbitCamera
 
 __all__ = ["OffManifoldView", "ViewResult", "measure", "offmanifold_views", "wobble"]
@@ -134,7 +134,7 @@ def measure(
     Parameters
     ----------
     session
-        A :class:`~envstudio.render.session.RenderSession` of the bake's scene.
+        A :class:`~envstudio.engine.session.RenderSession` of the bake's scene.
     method
         Its ``pem`` method with a bake loaded (``method.prepare`` done).
     views

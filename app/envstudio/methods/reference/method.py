@@ -45,6 +45,8 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.env_sampling import LUMINANCE, EnvironmentDistribution
+from envstudio.engine.materials import BANKS_MATERIAL_PARAMETERS
+from envstudio.engine.tangent_buffers import TangentBuffers
 from envstudio.gpu.context import is_software_renderer, require_version
 from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import preprocess
@@ -63,8 +65,6 @@ from envstudio.methods.reference.sample_allocation import (
 )
 from envstudio.methods.reference.tracing import TraceData
 from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter
-from envstudio.render.materials import BANKS_MATERIAL_PARAMETERS
-from envstudio.render.tangent_buffers import TangentBuffers
 from envstudio.scene.tangents import TangentField
 
 MODELS = ("phong", "microfacet", "banks")
@@ -576,7 +576,7 @@ class ReferenceMethod(Method):
         for gpu_node in reflectors:
             set_uniform(program, "u_model", gpu_node.model)
             set_uniform(program, "u_normal_matrix", gpu_node.normal)
-            if banks:  # the tangents of the banks material (render/tangent_buffers.py)
+            if banks:  # the tangents of the banks material (engine/tangent_buffers.py)
                 self._tangent_buffers.render(program, gpu_node, field)
             else:
                 gpu_node.mesh.render(program)

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.engine.images import GAP
 from envstudio.envmap.conversions import read_texture
 from envstudio.plugin import Figure, FigureRequest, to_ldr, upright, write_image
-from envstudio.render.images import GAP
 
 __all__ = ["Figure4", "figure4", "figure_image"]
 

@@ -33,6 +33,7 @@ import moderngl
 import numpy as np
 
 from envstudio.core.rsibr_warp import view_frame
+from envstudio.engine.images import to_ldr, upright
 from envstudio.envmap.conversions import read_cube
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
@@ -43,7 +44,6 @@ from envstudio.methods.rsibr.figures import figure4
 from envstudio.methods.rsibr.generator import MapGenerator
 from envstudio.methods.rsibr.gpu_bake import DEFAULT_SAMPLES, GpuBaker
 from envstudio.plugin import FrameInputs, Method, Parameter, StaticEnvironment
-from envstudio.render.images import to_ldr, upright
 
 __all__ = ["RsibrMethod"]
 

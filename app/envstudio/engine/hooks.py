@@ -1,6 +1,6 @@
 """The hook types a plugin hands the program: its method and what it adds to the commands.
 
-A :class:`Plugin` bundles one :class:`~envstudio.render.method.Method` subclass
+A :class:`Plugin` bundles one :class:`~envstudio.engine.method.Method` subclass
 with its subcommands (:class:`Command`), figures (:class:`Figure`), offline
 bakes (:class:`Bake`) and bench tables (:class:`BenchTable`). The generic
 commands know methods only through these: ``envstudio figure NAME`` lists every
@@ -16,8 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from envstudio.render.method import Method
-from envstudio.render.protocols import Session
+from envstudio.engine.method import Method
+from envstudio.engine.protocols import Session
 
 #: Adds a command's own options to its parser.
 AddArguments = Callable[[argparse.ArgumentParser], None]

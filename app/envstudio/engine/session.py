@@ -7,19 +7,21 @@ context and renders into an offscreen 8-bit target.
 
 from __future__ import annotations
 
+import sys
+
 import moderngl
 import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.parameters import parse_assignments
+from envstudio.engine.display import DISPLAY_NAMES
+from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.gpu_scene import GpuScene
+from envstudio.engine.method import Method
+from envstudio.engine.registry import available_methods, method_class
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.render.display import DISPLAY_NAMES
-from envstudio.render.frame import FrameRenderer, FrameStats
-from envstudio.render.gpu_scene import GpuScene
-from envstudio.render.method import Method
-from envstudio.render.registry import available_methods, method_class
 from envstudio.scene.graph import Scene
 
 
@@ -141,3 +143,27 @@ class RenderSession:
         if self._owns_ctx and self.ctx is not None:
             self.ctx.release()
             self.ctx = None
+
+
+def render_until_finished(session, method, size: tuple[int, int]):
+    """Render frames until the method is finished (one for one-shot methods), with progress
+    on stderr when it is a terminal; the last frame's stats."""
+    from tqdm import tqdm
+
+    stats = session.render_offscreen(method, size)
+    if method.finished():
+        return stats
+    with tqdm(
+        desc=method.name,
+        unit="frame",
+        file=sys.stderr,
+        disable=not sys.stderr.isatty(),
+        bar_format="{desc}: {n} frames {elapsed} {postfix}",
+    ) as bar:
+        while not method.finished():
+            stats = session.render_offscreen(method, size)
+            bar.update(1)
+            bar.set_postfix_str(method.status_line())
+    if method.status_line():
+        print(f"{method.name}: {method.status_line()}", file=sys.stderr)
+    return stats

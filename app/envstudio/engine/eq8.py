@@ -9,8 +9,8 @@ L_o = (1 − F) · k_d · L_blur(n) + F · L_glossy(r), F Schlick's of f_λ (see
 from __future__ import annotations
 
 from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.engine.gpu_scene import FrameInputs
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.render.gpu_scene import FrameInputs
 
 #: f_λ and k_d of eq. 8.
 EQ8_PARAMETERS = (

@@ -12,7 +12,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from envstudio.render.gpu_scene import GpuNode
+from envstudio.engine.gpu_scene import GpuNode
 from envstudio.scene.tangents import TangentField, Tangents, mesh_tangents
 
 

@@ -17,10 +17,10 @@ import sys
 from dataclasses import dataclass
 from functools import cache
 
+from envstudio.engine.hooks import Plugin
+from envstudio.engine.method import Method
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import add_shader_folder, shader_folder_names
-from envstudio.render.hooks import Plugin
-from envstudio.render.method import Method
 
 ENTRY_POINT_GROUP = "envstudio.methods"
 SHIPPED_DISTRIBUTION = "envmap-studio"

@@ -1,6 +1,6 @@
 """The session protocol: what a method's hooks may use of a rendering session.
 
-:class:`~envstudio.render.method.Method` names it only under ``TYPE_CHECKING``,
+:class:`~envstudio.engine.method.Method` names it only under ``TYPE_CHECKING``,
 so the method contract does not import the session that drives methods.
 """
 
@@ -12,10 +12,10 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.gpu_scene import GpuScene
+from envstudio.engine.method import Method
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.render.frame import FrameRenderer, FrameStats
-from envstudio.render.gpu_scene import GpuScene
-from envstudio.render.method import Method
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene
 
@@ -23,7 +23,7 @@ from envstudio.scene.graph import Scene
 class Session(Protocol):
     """What a method's hooks (report sections, figures, bench tables) may use of a session.
 
-    :class:`envstudio.render.session.RenderSession` is the one implementation:
+    :class:`envstudio.engine.session.RenderSession` is the one implementation:
     a scene on the GPU, its camera, the frame renderer and the methods' instances.
     """
 

@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import moderngl
 
+from envstudio.engine.display import TONEMAPS
+from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.gpu_scene import GpuScene
+from envstudio.engine.method import Method
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.render.display import TONEMAPS
-from envstudio.render.frame import FrameRenderer, FrameStats
-from envstudio.render.gpu_scene import GpuScene
-from envstudio.render.method import Method
 from envstudio.scene.camera import OrbitCamera
 
 
