@@ -278,3 +278,21 @@ def test_registered_texture_is_drawn_by_image(gui, gl_ctx):
     with pytest.raises(KeyError, match="register_texture"):
         draw_frame(gui, body)
     red.release()
+
+
+def test_every_character_of_the_methods_texts_has_a_glyph(imgui_ctx):
+    """Titles, summaries, parameter help and units, every method's and the display's: no "�"
+    (ImFont's lookup without fallback)."""
+    from envstudio.engine.display import DISPLAY_PARAMETERS
+    from envstudio.engine.registry import available_methods
+    from envstudio.ui.style import load_ui_font
+
+    font = load_ui_font()
+    assert font is not None
+    texts = [p.help + p.unit for p in DISPLAY_PARAMETERS]
+    for cls in available_methods().values():
+        texts += [cls.title, cls.summary, *(p.name + p.help + p.unit for p in cls.parameters)]
+    characters = {c for text in texts for c in text if c.isprintable() and c != " "}
+    assert {"λ", "⟨", "⟩", "∠", "∈", "−", "–"} <= characters  # the texts do use them
+    missing = sorted(c for c in characters if not font.is_glyph_in_font(ord(c)))
+    assert not missing, f"no glyph for {''.join(missing)!r}"

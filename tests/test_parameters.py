@@ -67,3 +67,26 @@ def test_registry_describes_every_method_with_valid_defaults():
             assert p.validate(p.default) == p.default
     with pytest.raises(ParameterError, match="unknown method 'phong'"):
         method_class("phong")
+
+
+def test_parameters_say_when_they_apply():
+    """The reference's Banks keys matter under model=banks only, rsibr's car-paint keys under
+    brdf=carpaint: the panel greys the rest out, `methods --json` says so, --param takes them."""
+    reference = {p.name: p for p in method_class("reference").parameters}
+    for name in ("sharpness", "tangent_field", "tangent_axis", "normalize", "self_shadowing"):
+        assert not reference[name].applies({"model": "phong"})
+        assert reference[name].applies({"model": "banks"})
+        assert reference[name].describe()["applies_when"] == {"model": ["banks"]}
+    assert reference["phong_exponent"].applies({"model": "microfacet"})
+    assert not reference["phong_exponent"].applies({"model": "banks"})
+    assert all(p.applies({"model": "phong"}) for p in reference.values() if not p.applies_when)
+    rsibr = {p.name: p for p in method_class("rsibr").parameters}
+    for name in ("coat_f0", "metallic", "paint_red"):
+        assert rsibr[name].applies({"brdf": "carpaint"}) and not rsibr[name].applies(
+            {"brdf": "phong"}
+        )
+    banks = {p.name: p for p in method_class("banks").parameters}
+    assert banks["sharpness"].applies_when == ()  # banks' own material always applies
+    values = ParameterValues(method_class("reference").parameters)
+    values["sharpness"] = 0.5  # accepted though it does not apply at the default model
+    assert not reference["sharpness"].applies(values)

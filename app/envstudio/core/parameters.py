@@ -8,7 +8,7 @@ Shared names (DESIGN.md): ``lod_bias`` (b), ``fresnel`` (f_λ),
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import asdict, dataclass
 
 from envstudio.errors import ParameterError
@@ -43,6 +43,10 @@ class Parameter:
         Logarithmic slider (exponents).
     rebuild : bool
         Changing it needs a program rebuild (a mode switch), not only a uniform.
+    applies_when : dict or tuple
+        When it matters: another parameter's name → the choices under which it does
+        (``{"model": ("banks",)}``), stored as a tuple of pairs. Empty: always. The panel
+        greys it out otherwise; the CLI accepts it anyway.
     """
 
     name: str
@@ -55,8 +59,16 @@ class Parameter:
     choices: tuple[str, ...] = ()
     log: bool = False
     rebuild: bool = False
+    applies_when: Mapping[str, str | tuple[str, ...]] | tuple = ()
 
     def __post_init__(self):
+        conditions = self.applies_when
+        if isinstance(conditions, Mapping):
+            pairs = tuple(
+                (name, (allowed,) if isinstance(allowed, str) else tuple(allowed))
+                for name, allowed in conditions.items()
+            )
+            object.__setattr__(self, "applies_when", pairs)
         if self.kind not in KINDS:
             raise ValueError(f"parameter {self.name}: kind {self.kind!r} not in {KINDS}")
         self.validate(self.default)
@@ -113,6 +125,13 @@ class Parameter:
             )
         return rgb
 
+    def applies(self, values: ParameterValues | Mapping[str, object]) -> bool:
+        """Whether it matters under ``values`` (:attr:`applies_when`; a name they lack: yes)."""
+        return all(
+            name not in values or str(values[name]) in allowed
+            for name, allowed in self.applies_when
+        )
+
     def _expected(self) -> str:
         kind = "an integer" if self.kind == "int" else "a number"
         return f"{kind} in [{self.minimum:g}, {self.maximum:g}]"
@@ -120,9 +139,10 @@ class Parameter:
     def describe(self) -> dict:
         """JSON-ready description (a colour's default as a list)."""
         described = asdict(self)
+        described["applies_when"] = {name: list(allowed) for name, allowed in self.applies_when}
         if self.kind == "color":
             described["default"] = list(self.default)
-        return {k: v for k, v in described.items() if k == "default" or v not in (None, (), "")}
+        return {k: v for k, v in described.items() if k == "default" or v not in (None, (), "", {})}
 
 
 class ParameterValues:

@@ -80,6 +80,17 @@ def parameter_widget(values: ParameterValues, param: Parameter) -> str | None:
     """
     label = param.name
     current = values[param.name]
+    if not param.applies(values):  # greyed out: it changes nothing under the others' values
+        imgui.begin_disabled()
+        try:
+            return _widget(values, param, label, current)
+        finally:
+            imgui.end_disabled()
+    return _widget(values, param, label, current)
+
+
+def _widget(values: ParameterValues, param: Parameter, label: str, current) -> str | None:
+    """The widget of :func:`parameter_widget`, drawn."""
     bounded = param.minimum is not None and param.maximum is not None
     if param.kind == "float" and bounded:
         flags = _CLAMP | (imgui.SliderFlags_.logarithmic if param.log else 0)

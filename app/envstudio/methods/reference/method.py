@@ -39,6 +39,7 @@ radiance.glsl, resolve.glsl.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import moderngl
 import numpy as np
@@ -140,13 +141,14 @@ class ReferenceMethod(Method):
             help="phong: seed 000 eq. 8 (diffuse + Phong, Schlick); microfacet: GGX; banks: "
             "seed 004 §5.3's Banks lobe about the tangent field (diffuse + Banks, Schlick).",
         ),
-        *BANKS_MATERIAL_PARAMETERS,
+        *(replace(p, applies_when={"model": "banks"}) for p in BANKS_MATERIAL_PARAMETERS),
         Parameter(
             "self_shadowing",
             "bool",
             False,
             help="model=banks: keep the term ⟨n,l⟩ (and the hemisphere) that method banks "
             "drops (seed 004 §5.3); off: the whole sphere, as the 3D map.",
+            applies_when={"model": "banks"},
         ),
         Parameter(
             "fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."
@@ -161,6 +163,7 @@ class ReferenceMethod(Method):
             "N",
             "Phong exponent (microfacet: alpha = sqrt(2 / (4N + 2))).",
             log=True,
+            applies_when={"model": ("phong", "microfacet")},
         ),
         Parameter(
             "trace",

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import sys
 import time
+from dataclasses import replace
 
 import moderngl
 import numpy as np
@@ -48,7 +49,14 @@ from envstudio.plugin import FrameInputs, Method, Parameter, StaticEnvironment
 __all__ = ["RsibrMethod"]
 
 _SHADING = {"phong": 0, "lambertian": 1, "carpaint": 2}
-_BAKE_PARAMETERS = {p.name: p for b in BRDFS.values() for p in b.parameters}
+#: Every BRDF's bake parameters, each applying under the BRDFs that declare it.
+_BAKE_PARAMETERS = {
+    p.name: replace(
+        p, applies_when={"brdf": tuple(n for n, b in BRDFS.items() if p in b.parameters)}
+    )
+    for b in BRDFS.values()
+    for p in b.parameters
+}
 
 
 class RsibrMethod(Method):
@@ -66,8 +74,26 @@ class RsibrMethod(Method):
             "brdf", "choice", "phong", unit="", help="BRDF of the maps.", choices=tuple(BRDFS)
         ),
         *_BAKE_PARAMETERS.values(),
-        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick f_λ added to Phong maps."),
-        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo (Phong, Lambertian)."),
+        Parameter(
+            "fresnel",
+            "float",
+            1.0,
+            0.0,
+            1.0,
+            "f_λ",
+            "Schlick f_λ added to Phong maps.",
+            applies_when={"brdf": "phong"},
+        ),
+        Parameter(
+            "kd",
+            "float",
+            0.0,
+            0.0,
+            1.0,
+            "k_d",
+            "Diffuse albedo (Phong, Lambertian).",
+            applies_when={"brdf": ("phong", "lambertian")},
+        ),
         Parameter(
             "warp",
             "choice",
