@@ -86,6 +86,8 @@ class Method(ABC):
     title: ClassVar[str]
     summary: ClassVar[str]
     parameters: ClassVar[tuple[Parameter, ...]] = ()
+    #: The paper it implements, by its authors, as the seeds name them ("" for none).
+    paper: ClassVar[str] = ""
     #: The reflectance model it renders: ``compare`` measures it against a reference of the
     #: same model (``phong``: diffuse + the Phong lobe with Schlick Fresnel; ``banks``;
     #: ``microfacet``); a model the ground truth cannot render gets no numbers.
@@ -162,6 +164,7 @@ class Method(ABC):
             "name": cls.name,
             "title": cls.title,
             "summary": cls.summary,
+            "paper": cls.paper,
             "reflectance": cls.reflectance,
             "parameters": [p.describe() for p in cls.parameters],
         }

@@ -110,15 +110,7 @@ def method_panel(
     """
     picked = None
     if _begin("Method"):
-        names = list(methods)
-        labels = [
-            f"{i + 1}: {cls.title}" if i < 9 else cls.title
-            for i, cls in enumerate(methods.values())
-        ]
-        imgui.set_next_item_width(-1.0)
-        changed, index = imgui.combo("##method", names.index(method.name), labels)
-        if changed and names[index] != method.name:
-            picked = names[index]
+        picked = _method_combo(methods, method)
         imgui.text_wrapped(method.summary)
         imgui.separator()
         if list(method.values):
@@ -160,6 +152,24 @@ def _panel_figure(method: Method, gui: ImGuiRenderer, display: ParameterValues) 
         imgui.image(gui.register_texture(texture), (edge, edge))
         imgui.set_item_tooltip(label)
     imgui.text_wrapped(", ".join(label for label, _ in images[:3]))
+
+
+def _method_combo(methods: dict[str, type[Method]], method: Method) -> str | None:
+    """The switch: "key: name — authors" per method, its summary as the tooltip; the name
+    picked (None: the same)."""
+    labels = {
+        name: f"{i + 1}: " * (i < 9) + f"{name} — {cls.paper or cls.title}"
+        for i, (name, cls) in enumerate(methods.items())
+    }
+    picked = None
+    imgui.set_next_item_width(-1.0)
+    if imgui.begin_combo("##method", labels[method.name]):
+        for name, cls in methods.items():
+            if imgui.selectable(labels[name], name == method.name)[0] and name != method.name:
+                picked = name
+            imgui.set_item_tooltip(cls.summary)
+        imgui.end_combo()
+    return picked
 
 
 def _reset(values: ParameterValues, scene: Scene) -> None:

@@ -41,6 +41,7 @@ class BanksMethod(Method):
     """Banks-model anisotropic 3D environment map (seed 004 §5.3)."""
 
     name = "banks"
+    paper = "Kautz, Vázquez, Heidrich, Seidel 2000, §5.3 (seed 004)"
     reflectance = "banks"
     title = "Kautz et al. 2000 (anisotropic Banks map, 3D texture)"
     summary = (

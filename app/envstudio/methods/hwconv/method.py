@@ -52,6 +52,7 @@ class HwConvMethod(Method):
     """Two-pass hardware Phong convolution of a dual-paraboloid map (seed 004 §5.2)."""
 
     name = "hwconv"
+    paper = "Kautz, Vázquez, Heidrich, Seidel 2000, §5.2 (seed 004)"
     title = "Kautz et al. 2000 (hardware Phong prefilter, dual paraboloid)"
     summary = (
         "Dual-paraboloid map convolved on the GPU with the Phong lobe at the centre (S) "

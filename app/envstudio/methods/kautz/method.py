@@ -74,6 +74,7 @@ class KautzMethod(Method):
     """Single-pass diffuse (SH) and glossy (LOD-biased mip chain) reflections, seed 000."""
 
     name = "kautz"
+    paper = "Kautz, Daubert, Seidel 2004 (seed 000)"
     title = "Kautz et al. 2003 (SH diffuse + biased mip chain)"
     summary = (
         "Diffuse from SH irradiance, glossy from the box-filtered cube mip chain with LOD "

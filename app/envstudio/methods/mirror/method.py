@@ -18,6 +18,7 @@ class MirrorMethod(Method):
     """
 
     name = "mirror"
+    paper = "Blinn, Newell 1976 (reflection mapping)"
     title = "Mirror (Blinn–Newell)"
     summary = (
         "Mirror reflection from the cube map, Schlick Fresnel blend with a crude diffuse term."

@@ -57,6 +57,7 @@ class PemMethod(Method):
     """Layered PEM playback with view blending (seed 003 §4, "run-time")."""
 
     name = "pem"
+    paper = "Hakura, Snyder, Lengyel 2001 (seed 003)"
     title = "PEM (Hakura–Snyder–Lengyel)"
     summary = (
         "Per-view environment maps inferred from ray traces (box + ellipsoid layers), "

@@ -126,6 +126,7 @@ class ReferenceMethod(Method):
     """Ground truth by progressive Monte Carlo integration of the rendering equation."""
 
     name = "reference"
+    paper = "Monte Carlo ground truth (seed 000 eq. 1)"
     #: The reflectance models it renders (``model``): a reference for methods of each.
     models = MODELS
     title = "Reference (Monte Carlo)"

@@ -63,6 +63,7 @@ class RsibrMethod(Method):
     """Seed 002: 12 icosahedral radiance sphere maps warped and blended per frame."""
 
     name = "rsibr"
+    paper = "Cabral, Olano, Nemec 1999 (seed 002)"
     title = "Cabral et al. 1999 (reflection-space IBR)"
     summary = (
         "Radiance sphere maps baked at the icosahedron's views, warped in reflection space "
