@@ -195,3 +195,22 @@ def test_no_display_exits_2_with_one_line(tmp_path):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith("envstudio: error: no display")
+
+
+def test_with_the_panels_hidden_the_screenshot_is_the_headless_render(xvfb, tmp_path):
+    """--hide-panels (Tab in the window): a clean view, pixel for pixel what `render` draws."""
+    shot = tmp_path / "clean.png"
+    result = run_view(
+        tmp_path / "config",
+        xvfb,
+        *("--method", "hwconv", "--hide-panels", "--frames", "3", "--screenshot", str(shot)),
+    )
+    assert result.returncode == 0, result.stderr
+    screen = read_image(shot)[..., :3]
+    session = RenderSession(build_scene())
+    try:
+        session.render_offscreen("hwconv", (screen.shape[1], screen.shape[0]))
+        displayed = session.read_ldr()
+    finally:
+        session.release()
+    np.testing.assert_array_equal(np.round(screen * 255.0), displayed)

@@ -28,6 +28,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--compare", metavar="METHOD", help="start in split screen against this method"
     )
     parser.add_argument(
+        "--hide-panels",
+        action="store_true",
+        help="start with the panels hidden (Tab shows them)",
+    )
+    parser.add_argument(
         "--cycle-methods",
         action="store_true",
         help="switch to the next method every few frames (smoke tests)",

@@ -108,12 +108,14 @@ class StartScene:
 
 @dataclass
 class RunOptions:
-    """Command-line behaviour of one run (``--frames``, ``--screenshot``, ``--cycle-methods``)."""
+    """Command-line behaviour of one run (``--frames``, ``--screenshot``, ``--cycle-methods``,
+    ``--compare``, ``--hide-panels``)."""
 
     frames: int = 0
     screenshot: Path | None = None
     cycle_methods: bool = False
     compare: str | None = None
+    hide_panels: bool = False
 
 
 def run_viewer(args: argparse.Namespace) -> int:
@@ -159,7 +161,9 @@ def run_viewer(args: argparse.Namespace) -> int:
             start=start,
             settings=settings,
             method=args.method,
-            options=RunOptions(args.frames, screenshot, args.cycle_methods, args.compare),
+            options=RunOptions(
+                args.frames, screenshot, args.cycle_methods, args.compare, args.hide_panels
+            ),
             warnings=warnings,
         )
         try:
@@ -290,6 +294,7 @@ class Viewer(WindowConfig):
         wnd.exit_key = None  # Escape is a shortcut, ignored while ImGui has the keyboard
         self.settings = settings
         self.options = options
+        self.panels_shown = not options.hide_panels  # Tab shows and hides them
         self.status = StatusLine()
         self.jobs = DeferredWork(self.status)
         self.session = RenderSession(start.scene, ctx=ctx)
@@ -457,7 +462,8 @@ class Viewer(WindowConfig):
 
         self.gui_input.prepare_frame(self.wnd.size, size, frametime)
         imgui.new_frame()
-        self._panels(size)
+        if self.panels_shown:
+            self._panels(size)
         self.status.draw()
         imgui.render()
         self.wnd.use()
@@ -545,6 +551,8 @@ class Viewer(WindowConfig):
                 self.select_method(names[index])
         elif key == keys.R:
             self.session.camera.reset()
+        elif key == keys.TAB:  # a clean view, and clean screenshots
+            self.panels_shown = not self.panels_shown
         elif key == keys.F12:
             self._request_capture("png")
         elif key == keys.ESCAPE:
