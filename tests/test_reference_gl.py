@@ -397,3 +397,33 @@ def test_auto_environment_sampling_avoids_the_lobe_where_local_objects_hide_the_
         session.release()
     np.testing.assert_array_equal(estimates["auto"], estimates[same_as])
     assert np.abs(estimates["auto"] - estimates[differs_from]).max() > 1e-3
+
+
+def test_the_windows_first_pass_shows_the_reflector_and_never_enters_the_estimate(gl_ctx):
+    """With a frame budget (the window) the first frames show a coarse first pass where no
+    batch has reached: almost no reflector pixel is black (before: every one until a whole
+    batch was done); the batch sums are those of a run without it."""
+    scene = load_scene("studio")
+    size = (160, 100)
+    session = RenderSession(scene, ctx=gl_ctx)
+    session.renderer.display["background"] = False
+    session.render_offscreen("mirror", size)
+    reflector = session.read_hdr().sum(axis=-1) > 0
+    budgeted = session.method("reference")
+    budgeted.values["trace"] = False
+    budgeted.frame_budget_ms = 1.0  # a band of a few rows per frame
+    session.render_offscreen(budgeted, size)
+    assert budgeted.status.batches == 0 and "first pass" in budgeted.status_line()
+    shown = session.read_ldr().sum(axis=-1) > 0
+    assert (shown & reflector).sum() >= 0.995 * reflector.sum()
+    while budgeted.status.batches == 0:
+        session.render_offscreen(budgeted, size)
+    banded = budgeted.estimate()
+    session.release()
+    whole = RenderSession(scene, ctx=gl_ctx)
+    method = whole.method("reference")
+    method.values["trace"] = False
+    whole.render_offscreen(method, size)
+    assert method.status.batches == 1
+    np.testing.assert_allclose(banded, method.estimate(), rtol=1e-5, atol=1e-6)
+    whole.release()

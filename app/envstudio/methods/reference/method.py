@@ -85,6 +85,10 @@ ESTIMATE_PROGRAMS = (
 )
 #: Seconds between measurements of the noise shown in the status line (a GPU read each).
 NOISE_REFRESH_S = 2.0
+#: The window's first pass: PREVIEW_SAMPLES per pixel at 1/PREVIEW_SCALE of the image's width
+#: and height (1/16 of a default batch's work), so few of its pixels are a zero draw.
+PREVIEW_SCALE = 4
+PREVIEW_SAMPLES = 8
 #: Batches before the time limit may stop the accumulation (a standard error needs two).
 MIN_TIMED_BATCHES = 2
 
@@ -271,6 +275,11 @@ class ReferenceMethod(Method):
         self._snapshots: dict[int, npt.NDArray[np.float32]] = {}
         self._pending_state: dict[str, npt.NDArray] | None = None
         self._band_start = 0
+        # the window's first pass: a few samples per pixel at 1/PREVIEW_SCALE of the size, shown
+        # where no batch has reached yet (made once per restart, only with a frame budget)
+        self._preview: moderngl.Texture | None = None
+        self._preview_fbo: moderngl.Framebuffer | None = None
+        self._preview_made = False
         self._row_work: npt.NDArray[np.float64] | None = None
         self._pixel_cost_s: float | None = None
         self._allocation: moderngl.Texture | None = None  # (units, m) per pixel, for the shader
@@ -300,7 +309,11 @@ class ReferenceMethod(Method):
         return None
 
     def status_line(self) -> str:
-        """Samples, noise, the last half-change, the state, and the projected time left."""
+        """Samples, noise, the last half-change, the state, and the projected time left; while
+        the window's first batch runs, how far it is."""
+        if self.status.batches == 0 and self._preview_made and self._sum is not None:
+            done = self._band_start / max(self._sum.size[1], 1)
+            return f"first pass {100 * done:.0f} % (coarse preview elsewhere)"
         self._refresh_noise()
         line = self.status.describe()
         reason = self.stop_reason()
@@ -359,6 +372,14 @@ class ReferenceMethod(Method):
             program = self.programs.get("reference/resolve.glsl")
             self._sum.use(location=0)
             set_uniform(program, "u_sum", 0)
+            first_pass = self.status.batches == 0 and self._preview_made
+            set_uniform(program, "u_first_pass", first_pass)
+            if first_pass:  # rows of the running batch, and the coarse pass elsewhere
+                self._batch.use(location=1)
+                self._preview.use(location=2)
+                set_uniform(program, "u_batch", 1)
+                set_uniform(program, "u_preview", 2)
+                set_uniform(program, "u_preview_scale", PREVIEW_SCALE)
             self._draw_reflectors(program, frame)
 
     def _accumulate(self, frame: FrameInputs) -> None:
@@ -377,6 +398,8 @@ class ReferenceMethod(Method):
         start = time.perf_counter()
         while True:
             if self._band_start == 0:
+                if self.frame_budget_ms is not None and not self._preview_made:
+                    self._preview_pass(frame)
                 self._depth_prepass(frame)
             rows = height - self._band_start
             if self.frame_budget_ms is not None:
@@ -445,6 +468,7 @@ class ReferenceMethod(Method):
             self._set_allocation(SampleAllocation.plain((frame.size[1], frame.size[0])))
             self._snapshots = {}
             self._band_start = 0
+            self._preview_made = False
             if self._pending_state is not None:
                 self._restore(self._pending_state, frame.size)
                 self._pending_state = None
@@ -482,39 +506,7 @@ class ReferenceMethod(Method):
         return bool(self.values["trace"] or self.values["pixel_filter"])
 
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
-        trace = bool(self.values["trace"])
-        require_version(self.ctx, 430, "method reference needs OpenGL 4.3 (storage buffers)")
-        defines = {"TRACE_LOCAL": int(trace)}
-        if self._uses_bvh():
-            defines["TRACE_STACK"] = self._trace.stack_size
-        program = self.programs.get("reference/accumulate.glsl", defines)
-        scene = frame.scene
-        scene.latlong.use(location=0)
-        set_uniform(program, "u_latlong", 0)
-        self._tables.bind(program, 1)
-        if self._uses_bvh():
-            self._trace.bind(program)
-        if trace:
-            set_uniform(program, "u_sh9", scene.sh9)
-        view_projection = frame.projection.astype(np.float64) @ frame.view.astype(np.float64)
-        set_uniform(program, "u_inverse_view_projection", np.linalg.inv(view_projection))
-        set_uniform(program, "u_viewport", np.asarray(frame.size, np.float32))
-        set_uniform(program, "u_camera_position", frame.camera_position)
-        set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
-        for name in ("kd", "fresnel", "phong_exponent", "sharpness"):
-            set_uniform(program, f"u_{name}", float(self.values[name]))
-        set_uniform(program, "u_banks_normalize", bool(self.values["normalize"]))
-        set_uniform(program, "u_self_shadowing", bool(self.values["self_shadowing"]))
-        set_uniform(program, "u_samples", int(self.values["samples"]))
-        set_uniform(program, "u_sequence", SEQUENCES.index(self.values["sequence"]))
-        set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
-        set_uniform(program, "u_environment_sampling", int(self._samples_inside_lobe(scene)))
-        set_uniform(program, "u_frame", self.status.batches)
-        set_uniform(program, "u_adaptive", bool(self.values["adaptive"]))
-        since = self.status.batches - self._sample_allocation.at
-        set_uniform(program, "u_batches_since_allocation", since)
-        self._allocation.use(location=4)
-        set_uniform(program, "u_allocation", 4)
+        program = self._accumulate_program(frame, frame.size, int(self.values["samples"]))
         self._batch_fbo.use()
         self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
         self.ctx.depth_func = "<="
@@ -531,6 +523,79 @@ class ReferenceMethod(Method):
         self.ctx.disable(moderngl.BLEND)
         self.ctx.blend_func = moderngl.DEFAULT_BLENDING
         self.ctx.depth_func = "<"
+
+    def _preview_pass(self, frame: FrameInputs) -> None:
+        """The window's first pass: every reflector pixel of a 1/:data:`PREVIEW_SCALE` image
+        at :data:`PREVIEW_SAMPLES` (the estimator itself, the coarse pixel's footprint), shown
+        until a batch reaches the pixel: no reflector stays black while the first batch runs."""
+        size = (max(1, frame.size[0] // PREVIEW_SCALE), max(1, frame.size[1] // PREVIEW_SCALE))
+        if self._preview is None or self._preview.size != size:
+            self._release_preview()
+            self._preview = self.ctx.texture(size, 4, dtype="f4")
+            depth = self.ctx.depth_renderbuffer(size)
+            self._preview_fbo = self.ctx.framebuffer([self._preview], depth)
+        fbo = self._preview_fbo
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        fbo.use()  # the viewport follows: the same projection over fewer pixels
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        resolve = self.programs.get("reference/resolve.glsl")
+        self._draw_reflectors(resolve, frame)
+        for gpu_node in frame.scene.local_objects():
+            set_uniform(resolve, "u_model", gpu_node.model)
+            set_uniform(resolve, "u_normal_matrix", gpu_node.normal)
+            gpu_node.mesh.render(resolve)
+        program = self._accumulate_program(frame, size, PREVIEW_SAMPLES)
+        set_uniform(program, "u_adaptive", False)
+        set_uniform(program, "u_chunk_first", 0)
+        set_uniform(program, "u_chunk_samples", PREVIEW_SAMPLES)
+        fbo.use()
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.depth_func = "<="
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
+        self._draw_reflectors(program, frame)
+        self.ctx.disable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.DEFAULT_BLENDING
+        self.ctx.depth_func = "<"
+        self._preview_made = True
+
+    def _accumulate_program(
+        self, frame: FrameInputs, size: tuple[int, int], samples: int
+    ) -> moderngl.Program:
+        """The estimator with this frame's uniforms, for a target of ``size`` at ``samples``."""
+        trace = bool(self.values["trace"])
+        require_version(self.ctx, 430, "method reference needs OpenGL 4.3 (storage buffers)")
+        defines = {"TRACE_LOCAL": int(trace)}
+        if self._uses_bvh():
+            defines["TRACE_STACK"] = self._trace.stack_size
+        program = self.programs.get("reference/accumulate.glsl", defines)
+        scene = frame.scene
+        scene.latlong.use(location=0)
+        set_uniform(program, "u_latlong", 0)
+        self._tables.bind(program, 1)
+        if self._uses_bvh():
+            self._trace.bind(program)
+        if trace:
+            set_uniform(program, "u_sh9", scene.sh9)
+        view_projection = frame.projection.astype(np.float64) @ frame.view.astype(np.float64)
+        set_uniform(program, "u_inverse_view_projection", np.linalg.inv(view_projection))
+        set_uniform(program, "u_viewport", np.asarray(size, np.float32))
+        set_uniform(program, "u_camera_position", frame.camera_position)
+        set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
+        for name in ("kd", "fresnel", "phong_exponent", "sharpness"):
+            set_uniform(program, f"u_{name}", float(self.values[name]))
+        set_uniform(program, "u_banks_normalize", bool(self.values["normalize"]))
+        set_uniform(program, "u_self_shadowing", bool(self.values["self_shadowing"]))
+        set_uniform(program, "u_samples", samples)
+        set_uniform(program, "u_sequence", SEQUENCES.index(self.values["sequence"]))
+        set_uniform(program, "u_pixel_filter", bool(self.values["pixel_filter"]))
+        set_uniform(program, "u_environment_sampling", int(self._samples_inside_lobe(scene)))
+        set_uniform(program, "u_frame", self.status.batches)
+        set_uniform(program, "u_adaptive", bool(self.values["adaptive"]))
+        since = self.status.batches - self._sample_allocation.at
+        set_uniform(program, "u_batches_since_allocation", since)
+        self._allocation.use(location=4)
+        set_uniform(program, "u_allocation", 4)
+        return program
 
     def _chunk_samples(self) -> int:
         """Estimates a pixel draws per draw call: ``samples_per_draw``, else the whole batch.
@@ -767,7 +832,15 @@ class ReferenceMethod(Method):
         self._allocation = self.ctx.texture(size, 2, dtype="f4")
         self._allocation.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
+    def _release_preview(self) -> None:
+        if self._preview_fbo is not None:
+            for obj in (*self._preview_fbo.color_attachments, self._preview_fbo.depth_attachment):
+                obj.release()
+            self._preview_fbo.release()
+        self._preview = self._preview_fbo = None
+
     def _release_targets(self) -> None:
+        self._release_preview()
         targets = (self._depth_fbo, self._batch_fbo, self._sums_fbo, self._depth)
         for obj in (*targets, self._sum, self._sum_sq, self._batch, self._allocation):
             if obj is not None:
