@@ -38,7 +38,9 @@ radiance.glsl, resolve.glsl.
 
 from __future__ import annotations
 
+import contextlib
 import time
+from collections.abc import Iterator
 from dataclasses import replace
 
 import moderngl
@@ -484,13 +486,7 @@ class ReferenceMethod(Method):
         """
         self._depth_fbo.clear(depth=1.0)
         self._depth_fbo.use()
-        self.ctx.enable(moderngl.DEPTH_TEST)
-        program = self.programs.get("reference/resolve.glsl")
-        self._draw_reflectors(program, frame)
-        for gpu_node in frame.scene.local_objects():
-            set_uniform(program, "u_model", gpu_node.model)
-            set_uniform(program, "u_normal_matrix", gpu_node.normal)
-            gpu_node.mesh.render(program)
+        self._draw_depth(frame)
         if self.frame_budget_ms is not None:
             w, h = frame.size
             depth = np.frombuffer(
@@ -501,6 +497,30 @@ class ReferenceMethod(Method):
             multipliers = self._sample_allocation.multipliers[::-1]
             self._row_work = (covered * multipliers).sum(axis=1, dtype=np.float64)
 
+    def _draw_depth(self, frame: FrameInputs) -> None:
+        """Reflectors and local objects into the bound target's depth (the nearest surface)."""
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        program = self.programs.get("reference/resolve.glsl")
+        self._draw_reflectors(program, frame)
+        for gpu_node in frame.scene.local_objects():
+            set_uniform(program, "u_model", gpu_node.model)
+            set_uniform(program, "u_normal_matrix", gpu_node.normal)
+            gpu_node.mesh.render(program)
+
+    @contextlib.contextmanager
+    def _adding(self) -> Iterator[None]:
+        """Additive blending onto the nearest surface (depth ``<=``): how estimates accumulate."""
+        self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
+        self.ctx.depth_func = "<="
+        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
+        self.ctx.blend_equation = moderngl.FUNC_ADD
+        try:
+            yield
+        finally:
+            self.ctx.disable(moderngl.BLEND)
+            self.ctx.blend_func = moderngl.DEFAULT_BLENDING
+            self.ctx.depth_func = "<"
+
     def _uses_bvh(self) -> bool:
         """Whether the scene's triangles are traced: for local light or for the pixel footprint."""
         return bool(self.values["trace"] or self.values["pixel_filter"])
@@ -508,21 +528,15 @@ class ReferenceMethod(Method):
     def _accumulate_band(self, frame: FrameInputs, first_row: int, rows: int) -> None:
         program = self._accumulate_program(frame, frame.size, int(self.values["samples"]))
         self._batch_fbo.use()
-        self.ctx.enable(moderngl.DEPTH_TEST | moderngl.BLEND)
-        self.ctx.depth_func = "<="
-        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
-        self.ctx.blend_equation = moderngl.FUNC_ADD
-        self.ctx.scissor = (0, first_row, frame.size[0], rows)
         chunk = self._chunk_samples()
         largest = int(self.values["samples"]) * int(self._sample_allocation.multipliers.max())
-        for first in range(0, largest, chunk):
-            set_uniform(program, "u_chunk_first", first)
-            set_uniform(program, "u_chunk_samples", chunk)
-            self._draw_reflectors(program, frame)
-        self.ctx.scissor = None
-        self.ctx.disable(moderngl.BLEND)
-        self.ctx.blend_func = moderngl.DEFAULT_BLENDING
-        self.ctx.depth_func = "<"
+        with self._adding():
+            self.ctx.scissor = (0, first_row, frame.size[0], rows)
+            for first in range(0, largest, chunk):
+                set_uniform(program, "u_chunk_first", first)
+                set_uniform(program, "u_chunk_samples", chunk)
+                self._draw_reflectors(program, frame)
+            self.ctx.scissor = None
 
     def _preview_pass(self, frame: FrameInputs) -> None:
         """The window's first pass: every reflector pixel of a 1/:data:`PREVIEW_SCALE` image
@@ -537,25 +551,14 @@ class ReferenceMethod(Method):
         fbo = self._preview_fbo
         fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
         fbo.use()  # the viewport follows: the same projection over fewer pixels
-        self.ctx.enable(moderngl.DEPTH_TEST)
-        resolve = self.programs.get("reference/resolve.glsl")
-        self._draw_reflectors(resolve, frame)
-        for gpu_node in frame.scene.local_objects():
-            set_uniform(resolve, "u_model", gpu_node.model)
-            set_uniform(resolve, "u_normal_matrix", gpu_node.normal)
-            gpu_node.mesh.render(resolve)
+        self._draw_depth(frame)
         program = self._accumulate_program(frame, size, PREVIEW_SAMPLES)
         set_uniform(program, "u_adaptive", False)
         set_uniform(program, "u_chunk_first", 0)
         set_uniform(program, "u_chunk_samples", PREVIEW_SAMPLES)
         fbo.use()
-        self.ctx.enable(moderngl.BLEND)
-        self.ctx.depth_func = "<="
-        self.ctx.blend_func = moderngl.ONE, moderngl.ONE
-        self._draw_reflectors(program, frame)
-        self.ctx.disable(moderngl.BLEND)
-        self.ctx.blend_func = moderngl.DEFAULT_BLENDING
-        self.ctx.depth_func = "<"
+        with self._adding():
+            self._draw_reflectors(program, frame)
         self._preview_made = True
 
     def _accumulate_program(
