@@ -131,3 +131,20 @@ def test_sigterm_ends_a_long_command_at_once_and_writes_nothing(tmp_path):
     assert time.perf_counter() - start < 5.0
     assert process.returncode == 130 and "interrupted" in err and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_bake_pem_on_a_full_disk_keeps_its_finished_views_and_says_how_to_resume(capsys, tmp_path):
+    if not IS_ROOT:
+        pytest.skip("a full disk needs a tmpfs mount (root)")
+    folder = tmp_path / "small"
+    _mount(folder, "size=40k")  # room for two views' parts of this tiny bake, not three
+    try:
+        out = folder / "room.pem"
+        argv = ["bake", "pem", "--scene", "room", "--views", "3", "--size", "16", "--samples", "1"]
+        argv += ["--em-size", "4", "--workers", "0", "--lookups", "cpu", "-o", str(out)]
+        status, err = run_cli(capsys, *argv)
+        assert_one_line_error(status, err, "disk is full", "views saved in", "resumes")
+        parts = sorted(p.name for p in (folder / "room.pem.parts").iterdir())
+        assert parts and len(parts) < 3 and not out.exists()
+    finally:
+        subprocess.run(["umount", str(folder)], check=True)

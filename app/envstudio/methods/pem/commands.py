@@ -142,7 +142,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
         views(OrbitCamera())  # views that coincide, elevations past ±89°: before any work
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
-    with tqdm(unit="view", desc="pem", leave=False) as bar:
+    with tqdm(unit="view", desc="pem", leave=False, disable=not sys.stderr.isatty()) as bar:
         try:
             report = run_bake(
                 args.scene,
