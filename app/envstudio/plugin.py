@@ -24,7 +24,9 @@ from envstudio.engine.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnv
 from envstudio.engine.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
 from envstudio.engine.images import tile, to_ldr, upright
 from envstudio.engine.method import Method, ReportExtra
+from envstudio.engine.miller_map import MillerDiffuseMap
 from envstudio.engine.protocols import Session
+from envstudio.engine.sh_irradiance import ShIrradiance, sh_parameters
 from envstudio.errors import InputFileError, ParameterError, UserError
 from envstudio.gpu.programs import ShaderCompileError, read_shader
 from envstudio.gpu.timers import PassTimer
@@ -46,6 +48,7 @@ __all__ = [
     "GroundTruth",
     "InputFileError",
     "Method",
+    "MillerDiffuseMap",
     "Parameter",
     "ParameterError",
     "ParameterValues",
@@ -53,12 +56,14 @@ __all__ = [
     "Plugin",
     "ReportExtra",
     "Session",
+    "ShIrradiance",
     "ShaderCompileError",
     "StaticEnvironment",
     "UserError",
     "read_shader",
     "set_eq8_uniforms",
     "set_uniform",
+    "sh_parameters",
     "tile",
     "to_ldr",
     "upright",

@@ -35,7 +35,7 @@ void main() {
 #include "common/fresnel.glsl"
 #include "common/eq8.glsl"
 uniform sampler3D u_map;
-uniform samplerCube u_environment;
+uniform samplerCube u_diffuse_map;
 uniform float u_map_size;
 uniform bool u_per_pixel;
 uniform bool u_normalise;
@@ -57,6 +57,6 @@ void main() {
         b = clamp(v_vertex_tangent.w, -1.0, 1.0);
     }
     vec3 glossy = banks_glossy(u_map, banks_coordinates(t, b, u_map_size), u_normalise);
-    f_color = vec4(eq8_shade(u_environment, n, r, glossy, u_kd, u_diffuse_level, u_fresnel), 1.0);
+    f_color = vec4(eq8_shade(n, r, texture(u_diffuse_map, n).rgb, glossy, u_kd, u_fresnel), 1.0);
 }
 #endif

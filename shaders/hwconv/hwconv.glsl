@@ -2,10 +2,10 @@
 // Method `hwconv`, seed 004 section 5.2 steps 13-14: the reflector with the
 // prefiltered dual-paraboloid map looked up along the reflection vector r
 // (the Phong environment map L_phong(r) of section 4), combined with a diffuse
-// term by seed 000 eq. 8,
-//   L_o = (1 - F(r.n)) L_diffuse + F(r.n) L_phong(r),
-// with Schlick's F (seed 000 section 5.2) and mirror's diffuse term from the static
-// cube map (common/eq8.glsl).
+// term by seed 004 eq. 2 with seed 000's Schlick weights (common/eq8.glsl),
+//   L_o = (1 - F(r.n)) k_d L_diffuse(n) + F(r.n) L_phong(r),
+// L_diffuse being Miller's diffuse map indexed by the normal (section 4,
+// engine/miller_map.py).
 #if defined VERTEX_SHADER
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER
@@ -14,7 +14,7 @@
 #include "common/paraboloid.glsl"
 uniform sampler2D u_front;
 uniform sampler2D u_back;
-uniform samplerCube u_environment;
+uniform samplerCube u_diffuse_map;
 uniform float u_size;
 uniform float u_border;
 out vec4 f_color;
@@ -27,6 +27,6 @@ void main() {
     vec3 front = textureLod(u_front, uv, 0.0).rgb;
     vec3 back = textureLod(u_back, uv, 0.0).rgb;
     vec3 glossy = face == 0 ? front : back;
-    f_color = vec4(eq8_shade(u_environment, n, r, glossy, u_kd, u_diffuse_level, u_fresnel), 1.0);
+    f_color = vec4(eq8_shade(n, r, texture(u_diffuse_map, n).rgb, glossy, u_kd, u_fresnel), 1.0);
 }
 #endif

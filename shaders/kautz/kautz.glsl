@@ -1,7 +1,7 @@
 #version 330 core
 // Method `kautz` (seed 000): diffuse and glossy environment reflections in one pass.
 //   diffuse  (section 4.1)  E(n) from SH (eq. 12), optionally plus cap lights
-//                           (kautz/diffuse.glsl); L_diffuse = k_d / pi * E(n)
+//                           (common/sh_irradiance.glsl); L_diffuse = k_d / pi * E(n)
 //   glossy   (section 4.2)  the cube map's box-filtered mip chain looked up with the
 //                           reflection vector and LOD bias b: texture(cube, r, b)
 //   Fresnel  (section 5.2)  Schlick with the single parameter f_lambda
@@ -14,7 +14,7 @@
 // object's size on screen), clamped below by an estimate of that LOD.
 // Defines: PER_PIXEL (0/1), LOD_LEVEL (0/1), SH_COEFFICIENTS (9, 25, 49), LIGHTS (0 .. 32).
 #include "common/fresnel.glsl"
-#include "kautz/diffuse.glsl"
+#include "common/sh_irradiance.glsl"
 uniform vec3 u_camera_position;
 uniform float u_fresnel;
 
@@ -36,7 +36,7 @@ void main() {
     if (dot(n, v) < 0.0) {
         n = -n;  // back faces of open meshes (the teapot) reflect too
     }
-    v_irradiance = kautz_irradiance(n);
+    v_irradiance = sh_irradiance(n);
     v_fresnel = schlick_fresnel(u_fresnel, dot(reflect(-v, n), n));
 #endif
 }
@@ -72,7 +72,7 @@ void main() {
     vec3 glossy = texture(u_environment, r, u_lod_bias).rgb;
 #endif
 #if PER_PIXEL
-    vec3 irradiance = kautz_irradiance(n);
+    vec3 irradiance = sh_irradiance(n);
     float F = schlick_fresnel(u_fresnel, dot(r, n));
 #else
     vec3 irradiance = v_irradiance;

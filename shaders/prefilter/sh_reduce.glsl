@@ -1,6 +1,6 @@
 #version 430
 // Method `kautz`, dynamic lighting on the GPU: sums the tile partials of
-// prefilter/sh_project.glsl into the uniform block of kautz/diffuse.glsl (one work group).
+// prefilter/sh_project.glsl into the uniform block of common/sh_irradiance.glsl (one work group).
 // With LIGHTS > 0 the tiles are ranked by excess power (ties by tile index, as
 // numpy's stable argsort); the LIGHTS strongest with non-zero power become cap
 // lights and their excess leaves the SH sum; the rest stays in it
@@ -24,7 +24,7 @@ layout(local_size_x = GROUP) in;
 layout(std430, binding = 1) readonly buffer FullSums {
     float u_full[];
 };
-layout(std430, binding = 3) writeonly buffer KautzDiffuseRows {
+layout(std430, binding = 3) writeonly buffer ShIrradianceRows {
     vec4 u_rows[];
 };
 #if LIGHTS > 0

@@ -11,6 +11,7 @@ from envstudio.commands import (
     bake,
     bench,
     compare,
+    diffuse,
     doctor,
     envmap,
     figure,
@@ -37,6 +38,7 @@ def builtin_commands() -> list[Command]:
         compare.COMMAND,
         fit_glossiness.COMMAND,
         sh.COMMAND,
+        diffuse.COMMAND,
         bake.command(),
         figure.COMMAND,
     ]

@@ -167,7 +167,7 @@ class DiffuseLighting:
         return np.array([a_hat(int(b)) for b in degree])[:, None] * self.coefficients
 
     def block(self, light_slots: int) -> npt.NDArray[np.float32]:
-        """The uniform block of shaders/kautz/diffuse.glsl as rows of vec4.
+        """The uniform block of shaders/common/sh_irradiance.glsl as rows of vec4.
 
         Parameters
         ----------

@@ -1,9 +1,9 @@
 """Seed 000 eq. 8's shading as several methods share it: Schlick Fresnel over a diffuse term.
 
-L_o = (1 − F) · k_d · L_blur(n) + F · L_glossy(r), F Schlick's of f_λ (seed 000
-§5.2, eq. 8); shaders/common/eq8.glsl evaluates it. ``mirror``, ``hwconv`` and
-``banks`` declare :data:`EQ8_PARAMETERS` and set the uniforms with
-:func:`set_eq8_uniforms`; only L_glossy is their own.
+L_o = (1 − F) · k_d · L_diffuse(n) + F · L_glossy(r), F Schlick's of f_λ (seed 000
+§5.2, eq. 8; seed 004 eq. 2); shaders/common/eq8.glsl evaluates it. ``mirror``,
+``hwconv`` and ``banks`` declare :data:`EQ8_PARAMETERS` and set the uniforms with
+:func:`set_eq8_uniforms`; L_diffuse = E(n)/π and L_glossy are their own.
 """
 
 from __future__ import annotations
@@ -28,12 +28,10 @@ EQ8_PARAMETERS = (
 
 
 def set_eq8_uniforms(program, frame: FrameInputs, values: ParameterValues) -> None:
-    """The uniforms of common/eq8.glsl's shading: camera, f_λ, k_d, the diffuse mip level.
+    """The uniforms of common/eq8.glsl's shading: camera, f_λ, k_d.
 
-    For every method that declares mirror's ``fresnel`` and ``kd``; the diffuse
-    term reads the cube map's 2 × 2-per-face level along the normal.
+    For every method that declares mirror's ``fresnel`` and ``kd``.
     """
     set_uniform(program, "u_camera_position", frame.camera_position)
     set_uniform(program, "u_fresnel", float(values["fresnel"]))
     set_uniform(program, "u_kd", float(values["kd"]))
-    set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)

@@ -11,7 +11,7 @@ no pixel leaves the GPU. Three compute dispatches (OpenGL 4.3):
    moment, power and RGB power;
 3. shaders/prefilter/sh_reduce.glsl — one work group: ranks the tiles by excess power,
    turns the strongest into cap lights, sums the rest into the SH coefficients,
-   multiplies by Â_l and writes the uniform block rows of shaders/kautz/diffuse.glsl.
+   multiplies by Â_l and writes the uniform block rows of shaders/common/sh_irradiance.glsl.
 """
 
 from __future__ import annotations

@@ -7,7 +7,8 @@ GPU by two compute passes, or in NumPy with ``builder=cpu`` or on contexts older
 than OpenGL 4.3); a change of s alone reuses the ring table and redoes only the
 cheap second pass. The reflector then looks the map up with the tangent of the
 material's tangent field (scene/tangents.py) and the view, per vertex or per
-pixel, and combines it with Fresnel and mirror's diffuse term by seed 000 eq. 8
+pixel, and combines it with Fresnel and Miller's diffuse map (seed 004 §4,
+engine/miller_map.py) by seed 004 eq. 2 with seed 000's Schlick weights
 (shaders/banks/banks.glsl). ``view=slice`` shows one slice of the map at
 ∠(v, t) = ``slice_angle`` as the frame (seed 004 Figure 6, right).
 
@@ -30,7 +31,14 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.banks.maps import GpuMapBuilder, MapSpec, build_cpu, map_texture, upload
-from envstudio.plugin import EQ8_PARAMETERS, FrameInputs, Method, Parameter, set_eq8_uniforms
+from envstudio.plugin import (
+    EQ8_PARAMETERS,
+    FrameInputs,
+    Method,
+    MillerDiffuseMap,
+    Parameter,
+    set_eq8_uniforms,
+)
 from envstudio.scene.tangents import TangentField
 
 VIEWS = ("reflector", "slice")
@@ -108,6 +116,7 @@ class BanksMethod(Method):
         self.builder = GpuMapBuilder(ctx, programs)
         self.tangent_buffers = TangentBuffers(ctx)
         self._quad = FullscreenPass(ctx)
+        self._diffuse = MillerDiffuseMap(ctx, programs)
         self._map: moderngl.Texture3D | None = None
         self._map_key: tuple | None = None
         #: Map builds so far, and the seconds the last one took (bench, tests).
@@ -178,9 +187,9 @@ class BanksMethod(Method):
             return
         program = self.programs.get("banks/banks.glsl")
         texture.use(location=0)
-        frame.scene.static_environment(frame.timer).cube.use(location=1)
+        self._diffuse.update(frame, "banks").use(location=1)
         set_uniform(program, "u_map", 0)
-        set_uniform(program, "u_environment", 1)
+        set_uniform(program, "u_diffuse_map", 1)
         set_uniform(program, "u_map_size", float(texture.size[0]))
         set_uniform(program, "u_per_pixel", bool(self.values["per_pixel"]))
         set_uniform(program, "u_normalise", normalise)
@@ -214,4 +223,5 @@ class BanksMethod(Method):
         self._release_map()
         self.builder.release()
         self.tangent_buffers.release()
+        self._diffuse.release()
         self._quad.release()

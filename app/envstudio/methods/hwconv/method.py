@@ -14,7 +14,8 @@ every frame with ``refilter_every_frame``, as in the paper's timing table):
    at its shrunk mip level, and blends them with weight d² (skipped in ``one_pass``);
 
 then the reflector reads the result along the reflection vector and combines it
-with a diffuse term by seed 000 eq. 8 (shaders/hwconv/hwconv.glsl). N and ε only
+with Miller's diffuse map indexed by the normal (seed 004 §4, engine/miller_map.py)
+by seed 004 eq. 2 with seed 000's Schlick weights (shaders/hwconv/hwconv.glsl). N and ε only
 change the kernel weights, uniforms of one compiled program: no recompile.
 ``view`` shows S, L, the blended map or the source as the frame instead.
 
@@ -36,7 +37,14 @@ from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.hwconv.convolution import FaceMaps, ParaboloidConvolution
 from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, plan_filters
-from envstudio.plugin import EQ8_PARAMETERS, FrameInputs, Method, Parameter, ReportExtra
+from envstudio.plugin import (
+    EQ8_PARAMETERS,
+    FrameInputs,
+    Method,
+    MillerDiffuseMap,
+    Parameter,
+    ReportExtra,
+)
 
 #: Choices of ``view``: the reflector, or one of the maps as the frame.
 VIEWS = ("reflector", "blended", "small", "large", "exact")
@@ -145,6 +153,7 @@ class HwConvMethod(Method):
         self._source_key: tuple | None = None
         self._filter_key: tuple | None = None
         self._result: FaceMaps | None = None
+        self._diffuse = MillerDiffuseMap(ctx, programs)
         #: Convolutions run so far (tests and the bench count refilters).
         self.refilters = 0
 
@@ -215,24 +224,23 @@ class HwConvMethod(Method):
         self._result = self.convolution.maps[self._result_name()]
         frame.target.use()
         if view == "reflector":
-            self._draw_reflectors(frame, plan, static.cube)
+            self._draw_reflectors(frame, plan)
         else:
             self._draw_map(frame, self.convolution.maps[view])
 
-    def _draw_reflectors(self, frame: FrameInputs, plan: FilterPlan, cube) -> None:
-        """Steps 13–14: the reflectors with the prefiltered map, eq. 8 of seed 000."""
+    def _draw_reflectors(self, frame: FrameInputs, plan: FilterPlan) -> None:
+        """Steps 13–14: the reflectors with the prefiltered map and Miller's diffuse map, eq. 2."""
         program = self.programs.get("hwconv/hwconv.glsl")
         self._result.use(front=0, back=1)
-        cube.use(location=2)
+        self._diffuse.update(frame, "hwconv").use(location=2)
         set_uniform(program, "u_front", 0)
         set_uniform(program, "u_back", 1)
-        set_uniform(program, "u_environment", 2)
+        set_uniform(program, "u_diffuse_map", 2)
         set_uniform(program, "u_size", float(plan.face_size))
         set_uniform(program, "u_border", float(plan.border))
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
         set_uniform(program, "u_kd", float(self.values["kd"]))
-        set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("hwconv"):
@@ -325,6 +333,7 @@ class HwConvMethod(Method):
     def release(self) -> None:
         """Free the maps and vertex arrays; safe to call twice."""
         self.convolution.release()
+        self._diffuse.release()
         self._quad.release()
         self._result = None
         self._source_key = self._filter_key = None

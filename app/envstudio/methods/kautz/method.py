@@ -47,27 +47,15 @@ The compute passes (``dynamic``, ``cross_face_filter``) need OpenGL 4.3.
 from __future__ import annotations
 
 import moderngl
-import numpy as np
-import numpy.typing as npt
 
-from envstudio.core.sh_lights import DiffuseProjector
-from envstudio.envmap.conversions import read_cube
+from envstudio.engine.sh_irradiance import STATIC_HEIGHT
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
-from envstudio.gpu.context import has_compute, require_version
+from envstudio.gpu.context import require_version
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter
-from envstudio.prefilter.brute_force import downsample_latlong
-from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
+from envstudio.plugin import FrameInputs, Method, Parameter, ShIrradiance, sh_parameters
 
-#: Lat-long height of the static projection (256 × 128, section 5.1.1).
-STATIC_HEIGHT = 128
-#: Face size of the cube level the projection of a captured cube (dynamic or static) reads.
-DYNAMIC_FACE_SIZE = 64
-#: Light slots of the shader's uniform block at most.
-MAX_LIGHTS = 32
-_BLOCK = "KautzDiffuse"
-_BLOCK_BINDING = 0
+__all__ = ["STATIC_HEIGHT", "KautzMethod"]
 
 
 class KautzMethod(Method):
@@ -116,34 +104,7 @@ class KautzMethod(Method):
             rebuild=True,
             help="Evaluate the diffuse term and Fresnel per pixel instead of per vertex.",
         ),
-        Parameter(
-            "sh_coefficients",
-            "choice",
-            "9",
-            choices=("9", "25", "49"),
-            rebuild=True,
-            help="SH order of the diffuse term: 9 (the paper's), 25 or 49 coefficients.",
-        ),
-        Parameter(
-            "lights",
-            "int",
-            0,
-            0,
-            MAX_LIGHTS,
-            "",
-            "Brightest tiles taken out of the SH as exact cap lights (0: the paper's).",
-            rebuild=True,
-        ),
-        Parameter(
-            "light_threshold",
-            "float",
-            1.0,
-            0.1,
-            100.0,
-            "× mean",
-            "Texels brighter than this times the mean luminance give up their excess to lights.",
-            log=True,
-        ),
+        *sh_parameters(),
         Parameter(
             "dynamic",
             "bool",
@@ -164,14 +125,10 @@ class KautzMethod(Method):
 
     def __init__(self, ctx: moderngl.Context, programs):
         super().__init__(ctx, programs)
-        self._rows: moderngl.Buffer | None = ctx.buffer(reserve=block_rows(49, MAX_LIGHTS) * 16)
-        self._static_key: tuple | None = None
-        self._projector: DiffuseProjector | None = None
-        self._projector_key: tuple | None = None
+        self._irradiance: ShIrradiance | None = ShIrradiance(ctx, programs)
         self._filtered: moderngl.TextureCube | None = None
         self._filtered_key: tuple | None = None
         self._dynamic: DynamicCube | None = None
-        self._gpu_projector: GpuDiffuseProjector | None = None
 
     # -- rendering ---------------------------------------------------------------------------
 
@@ -182,17 +139,15 @@ class KautzMethod(Method):
         if self.values["dynamic"]:
             environment = self._update_dynamic(frame, coefficients, lights)
         else:
-            environment = self._update_static(frame, coefficients, lights)
+            environment = self._update_static(frame)
         frame.target.use()
         defines = {
             "PER_PIXEL": int(bool(self.values["per_pixel"])),
             "LOD_LEVEL": int(self.values["lod_mode"] == "level"),
-            "SH_COEFFICIENTS": coefficients,
-            "LIGHTS": lights,
+            **ShIrradiance.defines(self.values),
         }
         program = self.programs.get("kautz/kautz.glsl", defines)
-        program[_BLOCK].binding = _BLOCK_BINDING
-        self._rows.bind_to_uniform_block(_BLOCK_BINDING)
+        self._irradiance.bind(program)
         environment.use(location=0)
         set_uniform(program, "u_environment", 0)
         set_uniform(program, "u_camera_position", frame.camera_position)
@@ -207,25 +162,15 @@ class KautzMethod(Method):
                 set_uniform(program, "u_normal_matrix", gpu_node.normal)
                 gpu_node.mesh.render(program)
 
-    def _update_static(
-        self, frame: FrameInputs, coefficients: int, lights: int
-    ) -> moderngl.TextureCube:
-        """Project the static environment when it (or a diffuse setting) changed.
+    def _update_static(self, frame: FrameInputs) -> moderngl.TextureCube:
+        """The static environment's cube (or its cross-face chain), its SH projected.
 
         Without local objects the lat-long map is projected on the CPU; with them,
         the captured cube (GpuScene.static_environment, seed 003 Figure 1c).
         """
         scene = frame.scene
         static = scene.static_environment(frame.timer)
-        threshold = float(self.values["light_threshold"])
-        key = (id(scene), static.revision, coefficients, lights, threshold)
-        if key != self._static_key:
-            with frame.timer.measure("kautz.project"):
-                if static.captured:
-                    self._project_cube(static.cube, coefficients, lights, threshold)
-                else:
-                    self._project_latlong(scene, coefficients, lights, threshold)
-            self._static_key = key
+        self._irradiance.update_static(frame, self.values, "kautz")
         if not self.values["cross_face_filter"]:
             return static.cube
         filtered_key = (id(scene), static.revision)
@@ -253,63 +198,12 @@ class KautzMethod(Method):
         with frame.timer.measure("kautz.mipmaps"):
             self._dynamic.build_mipmaps(bool(self.values["cross_face_filter"]))
         with frame.timer.measure("kautz.sh"):
-            self._project_on_gpu(
+            self._irradiance.project_on_gpu(
                 self._dynamic.cube, coefficients, lights, float(self.values["light_threshold"])
             )
-        self._static_key = None  # the block now holds the dynamic lighting
         return self._dynamic.cube
 
     # -- helpers -----------------------------------------------------------------------------
-
-    def _project_latlong(
-        self, scene: GpuScene, coefficients: int, lights: int, threshold: float
-    ) -> None:
-        """Project the environment's lat-long map on the CPU into the block (section 5.1.1)."""
-        radiance = _static_map(scene.scene.environment.radiance)
-        projector = self._cpu_projector(
-            "latlong", radiance.shape[:2], coefficients, lights, threshold
-        )
-        self._rows.write(np.ascontiguousarray(projector.project(radiance).block(lights)).tobytes())
-
-    def _project_cube(
-        self, cube: moderngl.TextureCube, coefficients: int, lights: int, threshold: float
-    ) -> None:
-        """Project a captured cube's 64² level into the block: on the GPU, or read back (3.3)."""
-        if has_compute(self.ctx):
-            self._project_on_gpu(cube, coefficients, lights, threshold)
-            return
-        faces = read_cube(cube, _projected_level(cube), self.programs)
-        projector = self._cpu_projector("cube", faces.shape[1:3], coefficients, lights, threshold)
-        self._rows.write(np.ascontiguousarray(projector.project(faces).block(lights)).tobytes())
-
-    def _project_on_gpu(
-        self, cube: moderngl.TextureCube, coefficients: int, lights: int, threshold: float
-    ) -> None:
-        """Project the cube's 64² level into the block by compute shaders (prefilter.sh_gpu)."""
-        if self._gpu_projector is None:
-            self._gpu_projector = GpuDiffuseProjector(self.ctx, self.programs)
-        self._gpu_projector.project(
-            cube, _projected_level(cube), coefficients, lights, threshold, self._rows
-        )
-
-    def _cpu_projector(
-        self,
-        layout: str,
-        shape: tuple[int, int],
-        coefficients: int,
-        lights: int,
-        threshold: float,
-    ) -> DiffuseProjector:
-        """The quadrature of a ``latlong`` (h, w) or ``cube`` (n, n) map, kept while it fits."""
-        key = (layout, shape, coefficients, lights, threshold)
-        if key != self._projector_key:
-            options = {"coefficients": coefficients, "lights": lights, "threshold": threshold}
-            if layout == "latlong":
-                self._projector = DiffuseProjector.for_latlong(*shape, **options)
-            else:
-                self._projector = DiffuseProjector.for_cube(shape[0], **options)
-            self._projector_key = key
-        return self._projector
 
     def _build_filtered(self, source: moderngl.TextureCube) -> None:
         """Copy level 0 of ``source`` (on the GPU) and build the cross-face chain from it."""
@@ -334,22 +228,8 @@ class KautzMethod(Method):
 
     def release(self) -> None:
         """Free the block buffer, the filtered and dynamic cube maps; safe to call twice."""
-        for obj in (self._rows, self._filtered, self._dynamic, self._gpu_projector):
+        for obj in (self._irradiance, self._filtered, self._dynamic):
             if obj is not None:
                 obj.release()
-        self._rows = self._filtered = self._dynamic = self._gpu_projector = None
-        self._static_key = self._filtered_key = None
-        self._projector = self._projector_key = None
-
-
-def _projected_level(cube: moderngl.TextureCube) -> int:
-    """Mip level of ``cube`` with DYNAMIC_FACE_SIZE² faces (level 0 if smaller)."""
-    return max(int(np.log2(cube.size[0] / DYNAMIC_FACE_SIZE)), 0)
-
-
-def _static_map(radiance: npt.NDArray[np.float32]) -> npt.NDArray[np.float64]:
-    """The environment box-filtered to at most STATIC_HEIGHT rows (power-preserving)."""
-    height = radiance.shape[0]
-    if height > STATIC_HEIGHT and height % STATIC_HEIGHT == 0:
-        return downsample_latlong(radiance, STATIC_HEIGHT)
-    return np.asarray(radiance, dtype=np.float64)
+        self._irradiance = self._filtered = self._dynamic = None
+        self._filtered_key = None

@@ -70,9 +70,9 @@ def figure4(method, frame_d: npt.ArrayLike) -> Figure4:
     warped = []
     for position in range(3):
         method.generate(frame_d, only=position)
-        warped.append(read_texture(method._generator.accumulation)[..., :3].copy())
+        warped.append(read_texture(method.generator.accumulation)[..., :3].copy())
     generated = read_texture(method.generate(frame_d))[..., :3].copy()
-    indices, weights = method._generator.sources
+    indices, weights = method.generator.sources
     sources = [np.asarray(method.bake.maps[i], dtype=np.float32) for i in indices]
     return Figure4(np.asarray(indices), np.asarray(weights), sources, warped, generated)
 

@@ -12,7 +12,10 @@ the viewer, §3.3); its view direction picks the icosahedron face and the spheri
 barycentric weights (§3.4); the three maps are warped through the tessellated
 disk and blended into a float target with its mip chain (methods.rsibr.generator);
 the reflectors are drawn sphere-mapped from it (shaders/rsibr/rsibr.glsl), with
-Fresnel and the diffuse term added where the BRDF's maps do not hold them.
+Fresnel and the diffuse term added where the BRDF's maps do not hold them. For
+Phong with k_d > 0 the diffuse term is the paper's own (§3): a second set of 12
+Lambertian maps, warped by the normal and blended the same way
+(methods.rsibr.map_set), read at the same texel (the texel of r is that of n).
 
 A change of the BRDF or of a parameter it bakes starts a new bake. Headless
 (``frame_budget_ms`` None) it runs at once; in the window every bake, the first
@@ -26,24 +29,19 @@ disk's vertices (§6's future work).
 
 from __future__ import annotations
 
-import sys
-import time
 from dataclasses import replace
 
 import moderngl
 import numpy as np
 
-from envstudio.core.rsibr_warp import view_frame
 from envstudio.engine.images import to_ldr, upright
-from envstudio.envmap.conversions import read_cube
-from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.io.cache_entries import discard
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.bake.brdfs import BRDFS, brdf
 from envstudio.methods.rsibr.figures import figure4
 from envstudio.methods.rsibr.generator import MapGenerator
-from envstudio.methods.rsibr.gpu_bake import DEFAULT_SAMPLES, GpuBaker
+from envstudio.methods.rsibr.gpu_bake import DEFAULT_SAMPLES
+from envstudio.methods.rsibr.map_set import MapSet
 from envstudio.plugin import FrameInputs, Method, Parameter, StaticEnvironment
 
 __all__ = ["RsibrMethod"]
@@ -96,6 +94,18 @@ class RsibrMethod(Method):
             applies_when={"brdf": ("phong", "lambertian")},
         ),
         Parameter(
+            "diffuse_samples",
+            "int",
+            1024,
+            64,
+            16384,
+            "",
+            "Importance samples per texel of the Lambertian maps of k_d (256: as the BRDF's "
+            "maps; a sun needs 1024 for 1 % irradiance error).",
+            log=True,
+            applies_when={"brdf": "phong"},
+        ),
+        Parameter(
             "warp",
             "choice",
             "auto",
@@ -111,118 +121,52 @@ class RsibrMethod(Method):
 
     def __init__(self, ctx: moderngl.Context, programs):
         super().__init__(ctx, programs)
-        self.bake: rb.RsibrBake | None = None
-        self._bake_key: tuple | None = None
-        self._maps: list[moderngl.Texture] = []
-        self._generator: MapGenerator | None = None
-        self._pending: dict | None = None
-        self._wanted: tuple | None = None
-        self._env_keys: dict[tuple, str] = {}
-        self.last_bake_seconds: float | None = None
+        self._glossy = MapSet(ctx, programs)
+        self._diffuse = MapSet(ctx, programs)
         #: T_d of the last frame drawn (Figure 4's destination frame).
         self.last_frame_d: np.ndarray | None = None
         self._thumbnails: list[moderngl.Texture] = []
 
     # -- bakes --------------------------------------------------------------------------
 
+    @property
+    def bake(self) -> rb.RsibrBake | None:
+        """The BRDF's installed bake, or None before the first."""
+        return self._glossy.bake
+
+    @property
+    def last_bake_seconds(self) -> float | None:
+        """Seconds the BRDF's last bake took; None when it came from the cache."""
+        return self._glossy.last_bake_seconds
+
     def bake_values(self) -> dict[str, float]:
         """The current BRDF's bake parameters (bake.rsibr.brdfs)."""
         spec = brdf(self.values["brdf"])
         return spec.values({p.name: self.values[p.name] for p in spec.parameters})
-
-    def _wanted_key(self, frame: FrameInputs, static: StaticEnvironment) -> tuple:
-        values = tuple(sorted(self.bake_values().items()))
-        return (id(frame.scene), static.revision, self.values["brdf"], values, self.map_size)
 
     @property
     def map_size(self) -> int:
         """Edge of the baked maps in texels."""
         return int(self.values["map_size"])
 
-    def _update_bake(self, frame: FrameInputs, static: StaticEnvironment) -> None:
-        wanted = self._wanted_key(frame, static)
-        if wanted == self._bake_key:
-            self._pending = None
-            return
-        if self._pending is None or self._pending["key"] != wanted:
-            self._start(wanted, static)
-        if self._pending is not None:
-            budget = self.frame_budget_ms
-            with frame.timer.measure("rsibr.bake"):
-                self._continue(budget)
+    def _needs_diffuse_maps(self) -> bool:
+        """Phong with k_d > 0: its diffuse term comes from Lambertian maps (seed 002 §3)."""
+        return self.values["brdf"] == "phong" and float(self.values["kd"]) > 0.0
 
-    def _start(self, key: tuple, static: StaticEnvironment) -> None:
-        env_key = self._env_keys.get(key[:2])
-        if env_key is None:
-            env_key = rb.environment_key(read_cube(static.cube, 0, self.programs))
-            self._env_keys = {key[:2]: env_key}
-        name, values = key[2], dict(key[3])
-        path = rb.cache_dir() / rb.cache_key(
-            env_key, name, values, self.map_size, 12, DEFAULT_SAMPLES
-        )
-        self._pending = None
-        if path.exists():
-            try:
-                self._install(rb.load_bake(path, size=self.map_size), key)
-                return
-            except InputFileError as error:  # refused: say so, bake it again
-                print(f"envstudio: note: {error}; discarded, baking again", file=sys.stderr)
-                discard(path)
-        views, faces = rb.geodesic_views(12)
-        self._pending = {
-            "key": key,
-            "path": path,
-            "cube": static.cube,
-            "env": env_key,
-            "views": views,
-            "faces": faces,
-            "frames": np.stack([view_frame(v) for v in views]),
-            "maps": [],
-            "values": values,
-            "start": time.perf_counter(),
-        }
-
-    def _continue(self, budget_ms: float | None) -> None:
-        """Bake views until all are done or ``budget_ms`` is spent (at least one view)."""
-        job = self._pending
-        start = time.perf_counter()
-        baker = GpuBaker(self.ctx, self.programs, self.map_size)
-        try:
-            while len(job["maps"]) < len(job["views"]):
-                frame = job["frames"][len(job["maps"])]
-                job["maps"].append(
-                    baker.bake(job["cube"], job["key"][2], job["values"], frame[None])[0]
-                )
-                spent = 1e3 * (time.perf_counter() - start)
-                more = len(job["maps"]) < len(job["views"])
-                if more and budget_ms is not None and spent > budget_ms:
-                    return
-        finally:
-            baker.release()
-        bake = rb.RsibrBake(
-            np.stack(job["maps"]),
-            job["views"],
-            job["frames"],
-            job["faces"],
-            job["key"][2],
-            job["values"],
-            DEFAULT_SAMPLES,
-            "gpu",
-            job["env"],
-        )
-        self.last_bake_seconds = time.perf_counter() - job["start"]
-        job["path"].parent.mkdir(parents=True, exist_ok=True)
-        rb.save_bake(job["path"], bake)
-        self._install(bake, job["key"])
-        self._pending = None
-
-    def _install(self, bake: rb.RsibrBake, key: tuple) -> None:
-        self._release_maps()
-        for image in bake.maps:
-            tex = self.ctx.texture((bake.size, bake.size), 3, image.tobytes(), dtype="f4")
-            tex.repeat_x = tex.repeat_y = False
-            self._maps.append(tex)
-        self.bake, self._bake_key = bake, key
+    def _update_bakes(self, frame: FrameInputs, static: StaticEnvironment) -> None:
+        scene_key = (id(frame.scene), static.revision)
+        values = tuple(sorted(self.bake_values().items()))
+        glossy = (*scene_key, self.values["brdf"], values, self.map_size, DEFAULT_SAMPLES)
+        wanted = [(self._glossy, glossy)]
+        if self._needs_diffuse_maps():
+            samples = int(self.values["diffuse_samples"])
+            diffuse = (*scene_key, "lambertian", (), self.map_size, samples)
+            wanted.append((self._diffuse, diffuse))
+        with frame.timer.measure("rsibr.bake"):
+            for maps, key in wanted:
+                maps.update(key, static, self.frame_budget_ms)
+                if maps.pending is not None:
+                    return  # one bake at a time within the frame budget
 
     # -- frames -------------------------------------------------------------------------
 
@@ -231,24 +175,23 @@ class RsibrMethod(Method):
 
         ``only`` warps one of the face's three sources alone (MapGenerator.generate).
         """
-        if self._generator is None or self._generator.size != self.bake.size:
-            if self._generator is not None:
-                self._generator.release()
-            self._generator = MapGenerator(self.ctx, self.programs, self.bake.size)
         warp = self.values["warp"]
-        return self._generator.generate(
-            self._maps,
-            self.bake.views,
-            self.bake.frames,
-            self.bake.faces,
-            frame_d,
-            self.bake.warp if warp == "auto" else warp,
-            rings=self.values["rings"],
-            fade=self.values["fade"],
-            fade_radius=self.values["fade_radius"],
-            per_pixel=self.values["per_pixel"],
-            only=only,
+        return self._glossy.generate(
+            frame_d, self.bake.warp if warp == "auto" else warp, only=only, **self._warp_options()
         )
+
+    @property
+    def generator(self) -> MapGenerator | None:
+        """The BRDF maps' generator of the last :meth:`generate` (Figure 4)."""
+        return self._glossy.generator
+
+    def _warp_options(self) -> dict:
+        return {
+            "rings": self.values["rings"],
+            "fade": self.values["fade"],
+            "fade_radius": self.values["fade_radius"],
+            "per_pixel": self.values["per_pixel"],
+        }
 
     def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
         """Figure 4 of the last frame drawn, for the Method panel (methods.rsibr.figure).
@@ -289,27 +232,29 @@ class RsibrMethod(Method):
 
     def render(self, frame: FrameInputs) -> None:
         static = frame.scene.static_environment(frame.timer)
-        self._update_bake(frame, static)
+        self._update_bakes(frame, static)
         if self.bake is None:
             return  # the window's first bake is still under way: nothing to draw yet
         frame_d = np.asarray(frame.view, dtype=np.float64)[:3, :3].T
         self.last_frame_d = frame_d
         with frame.timer.measure("rsibr.warp"):
             generated = self.generate(frame_d)
+            diffuse = self._diffuse_map(frame_d)
         frame.target.use()
         # the warp and the bake draw without depth test: without it again, back faces of
         # the reflector would land over front faces (and over the local objects)
         self.ctx.enable(moderngl.DEPTH_TEST)
         program = self.programs.get("rsibr/rsibr.glsl")
         generated.use(location=0)
-        static.cube.use(location=1)
         set_uniform(program, "u_map", 0)
-        set_uniform(program, "u_environment", 1)
+        if diffuse is not None:
+            diffuse.use(location=1)
+        set_uniform(program, "u_diffuse_map", 1)
+        set_uniform(program, "u_has_diffuse_map", diffuse is not None)
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_shading", _SHADING[self.bake.brdf])
         set_uniform(program, "u_fresnel", self.values["fresnel"])
         set_uniform(program, "u_kd", self.values["kd"])
-        set_uniform(program, "u_diffuse_level", frame.scene.cube_levels - 2)
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("rsibr.render"):
@@ -318,30 +263,36 @@ class RsibrMethod(Method):
                 set_uniform(program, "u_normal_matrix", gpu_node.normal)
                 gpu_node.mesh.render(program)
 
+    def _diffuse_map(self, frame_d: np.ndarray) -> moderngl.Texture | None:
+        """The normal-warped Lambertian map for T_d, or None where none applies or is baked."""
+        if not self._needs_diffuse_maps() or self._diffuse.bake is None:
+            return None
+        return self._diffuse.generate(frame_d, "normal", **self._warp_options())
+
+    def _pending(self) -> dict | None:
+        for maps in (self._glossy, self._diffuse):
+            if maps.pending is not None:
+                return maps.pending
+        return None
+
     def finished(self) -> bool:
-        return self._pending is None
+        return self._pending() is None
 
     def progress(self) -> float | None:
         """Fraction of the views of the bake under way, or None when none is."""
-        if self._pending is None:
+        pending = self._pending()
+        if pending is None:
             return None
-        return len(self._pending["maps"]) / len(self._pending["views"])
+        return len(pending["maps"]) / len(pending["views"])
 
     def status_line(self) -> str:
-        if self._pending is not None:
-            done, total = len(self._pending["maps"]), len(self._pending["views"])
-            return f"baking {self._pending['key'][2]} maps {done}/{total}"
+        pending = self._pending()
+        if pending is not None:
+            done, total = len(pending["maps"]), len(pending["views"])
+            return f"baking {pending['key'][2]} maps {done}/{total}"
         return ""
 
-    def _release_maps(self) -> None:
-        for tex in self._maps:
-            tex.release()
-        self._maps = []
-
     def release(self) -> None:
-        self._release_maps()
+        self._glossy.release()
+        self._diffuse.release()
         self._release_thumbnails()
-        if self._generator is not None:
-            self._generator.release()
-        self._generator = None
-        self.bake = self._bake_key = self._pending = None

@@ -1,6 +1,7 @@
-// The diffuse term of method `kautz`: irradiance E(n) from the uniform block
-// KautzDiffuse, which core.sh_lights.DiffuseLighting.block (static environments)
-// or prefilter/sh_reduce.glsl (dynamic ones, on the GPU) fills:
+// Irradiance E(n) from SH plus cap lights (seed 000 section 4.1, eq. 12, and past it:
+// core.sh_lights), the diffuse term of `kautz` and `mirror` (engine/sh_irradiance.py).
+// The uniform block ShIrradiance, which core.sh_lights.DiffuseLighting.block (static
+// environments) or prefilter/sh_reduce.glsl (dynamic ones, on the GPU) fills:
 //   u_sh[i]              vec4(A_l L_i, 0): SH coefficients already convolved with the
 //                        clamped cosine (seed 000 eq. 12), storage order of
 //                        common/sh_bands.glsl
@@ -11,7 +12,7 @@
 #include "common/sh_bands.glsl"
 #include "common/cap_light.glsl"
 
-layout(std140) uniform KautzDiffuse {
+layout(std140) uniform ShIrradiance {
     vec4 u_sh[SH_COUNT];
 #if LIGHTS > 0
     vec4 u_light_direction[LIGHTS];
@@ -19,7 +20,7 @@ layout(std140) uniform KautzDiffuse {
 #endif
 };
 
-vec3 kautz_irradiance(vec3 n) {
+vec3 sh_irradiance(vec3 n) {
     float y[SH_COUNT];
     sh_bands_basis(n, y);
     vec3 e = vec3(0.0);
