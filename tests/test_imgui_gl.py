@@ -16,6 +16,7 @@ from imgui_bundle import imgui
 from moderngl_window.context.base import KeyModifiers
 from moderngl_window.context.glfw.keys import Keys
 
+from envstudio.ui.docking import PANEL_FLAGS, PANELS, DockLayout, ViewRect, gl_viewport
 from envstudio.ui.imgui_input import ImGuiInput
 from envstudio.ui.imgui_renderer import GLStateQuery, ImGuiRenderer
 
@@ -296,3 +297,132 @@ def test_every_character_of_the_methods_texts_has_a_glyph(imgui_ctx):
     assert {"λ", "⟨", "⟩", "∠", "∈", "−", "–"} <= characters  # the texts do use them
     missing = sorted(c for c in characters if not font.is_glyph_in_font(ord(c)))
     assert not missing, f"no glyph for {''.join(missing)!r}"
+
+
+# -- docking (ui/docking.py): the 3D view is the dock space's central node -----------------
+
+DOCK_DISPLAY = (1280, 800)
+
+
+@pytest.fixture
+def docked(gl_ctx, imgui_ctx):
+    """Docking on, a renderer and a 1280x800 target: (renderer, input, layout, run_frame).
+
+    ``run_frame(shown=True, events=())`` runs one frame (``events`` are calls on the input
+    bridge, applied first) and returns (view rectangle, {panel: (rect, shown)})."""
+    imgui.get_io().config_flags |= imgui.ConfigFlags_.docking_enable
+    renderer = ImGuiRenderer(gl_ctx)
+    fbo = gl_ctx.simple_framebuffer(DOCK_DISPLAY)
+    fbo.use()
+    gui_input = ImGuiInput(imgui.get_io(), Keys)
+    layout = DockLayout()
+    gui_input.prepare_frame(DOCK_DISPLAY, DOCK_DISPLAY, 1.0 / 60.0)
+    imgui.new_frame()
+    layout.warm_up()
+    imgui.end_frame()
+
+    def run_frame(shown: bool = True, events=()):
+        for event in events:
+            event(gui_input)
+        gui_input.prepare_frame(DOCK_DISPLAY, DOCK_DISPLAY, 1.0 / 60.0)
+        imgui.new_frame()
+        view = layout.frame(shown)
+        panels = {}
+        if shown:
+            for name in PANELS:
+                imgui.begin(name, None, PANEL_FLAGS)
+                imgui.text(name)
+                pos, size = imgui.get_window_pos(), imgui.get_window_size()
+                panels[name] = (ViewRect(pos.x, pos.y, size.x, size.y), imgui.is_window_docked())
+                imgui.end()
+        imgui.render()
+        renderer.render(imgui.get_draw_data())
+        return view, panels
+
+    yield renderer, layout, run_frame
+    renderer.release()
+    fbo.release()
+
+
+def assert_view_clear_of_panels(view: ViewRect, panels: dict) -> None:
+    for name, (rect, is_docked) in panels.items():
+        assert is_docked, f"{name} floats"
+        assert not view.overlaps(rect), f"{name} {rect} covers the view {view}"
+
+
+def test_the_default_layout_docks_every_panel_around_the_view(docked):
+    _, _, run_frame = docked
+    view, panels = run_frame()
+    assert set(panels) == set(PANELS)
+    assert_view_clear_of_panels(view, panels)
+    method, stats = panels["Method"][0], panels["Stats"][0]
+    assert 0 < view.x - (method.x + method.width) <= 4  # a splitter between them
+    assert 0 < stats.x - (view.x + view.width) <= 4
+    assert view.y > 0 and view.y + view.height == DOCK_DISPLAY[1]  # below the menu bar
+    assert panels["Stats"][0] == panels["Capture"][0], "Stats and Capture share a tabbed node"
+    assert view.width * view.height > 0.5 * DOCK_DISPLAY[0] * DOCK_DISPLAY[1]
+    # hidden (Tab): the view is the whole display; shown again, the same layout
+    hidden, _ = run_frame(shown=False)
+    assert hidden == ViewRect(0.0, 0.0, *map(float, DOCK_DISPLAY))
+    run_frame()  # the menu bar's work area moves a frame late
+    assert run_frame()[0] == view
+
+
+def test_a_dragged_splitter_moves_the_view_and_reset_layout_restores_it(docked, gl_ctx):
+    _, layout, run_frame = docked
+    default, panels = run_frame()
+    method = panels["Method"][0]
+    x, y = method.x + method.width + 1.0, method.y + 100.0
+    steps = [
+        lambda i: i.on_mouse_position_event(x, y, 0, 0),
+        lambda i: i.on_mouse_press_event(x, y, LEFT_BUTTON),
+        lambda i: i.on_mouse_drag_event(x + 150.0, y, 150, 0),
+        lambda i: i.on_mouse_release_event(x + 150.0, y, LEFT_BUTTON),
+    ]
+    for step in steps:
+        run_frame(events=[step])
+    dragged, panels = run_frame()
+    assert_view_clear_of_panels(dragged, panels)
+    assert dragged.x == pytest.approx(default.x + 150.0, abs=2.0)
+    assert dragged.x + dragged.width == default.x + default.width
+
+    # the layout is ImGui's ini text (kept in the settings file): a new context restores it
+    saved = imgui.save_ini_settings_to_memory()
+    assert "[Docking][Data]" in saved and "CentralNode=1" in saved
+    layout.reset()
+    view, panels = run_frame()
+    assert view == default
+    assert_view_clear_of_panels(view, panels)
+    assert panels["Stats"][1] and run_frame()[0] == default
+
+    first = imgui.get_current_context()
+    second = imgui.create_context()  # made current
+    try:
+        io = imgui.get_io()
+        io.set_ini_filename(None)
+        io.config_flags |= imgui.ConfigFlags_.docking_enable
+        imgui.load_ini_settings_from_memory(saved)
+        renderer = ImGuiRenderer(gl_ctx)
+        ImGuiInput(io, Keys).prepare_frame(DOCK_DISPLAY, DOCK_DISPLAY, 1.0 / 60.0)
+        restored = DockLayout()
+        imgui.new_frame()
+        restored.warm_up()
+        imgui.end_frame()
+        imgui.new_frame()
+        assert restored.frame(True) == dragged
+        imgui.end_frame()
+        renderer.release()
+    finally:
+        imgui.destroy_context(second)
+        imgui.set_current_context(first)
+
+
+def test_the_view_rectangle_in_framebuffer_pixels():
+    view = ViewRect(301.0, 21.0, 697.0, 779.0)
+    assert gl_viewport(view, (1280, 800), (1280, 800)) == (301, 0, 697, 779)
+    # HiDPI: two pixels a point; edges rounded, so neighbours still meet
+    assert gl_viewport(view, (1280, 800), (2560, 1600)) == (602, 0, 1394, 1558)
+    assert gl_viewport(ViewRect(0.25, 0.0, 10.5, 10.0), (20, 10), (40, 20)) == (0, 0, 22, 20)
+    # clipped to the framebuffer, never negative
+    assert gl_viewport(ViewRect(-5.0, -5.0, 50.0, 50.0), (20, 10), (20, 10)) == (0, 0, 20, 10)
+    assert gl_viewport(ViewRect(30.0, 0.0, 5.0, 5.0), (20, 10), (20, 10))[2] == 0

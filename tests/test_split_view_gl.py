@@ -55,3 +55,32 @@ def test_heat_map_is_zero_for_identical_methods_and_bright_where_they_differ(gl_
     np.testing.assert_allclose(corner, zero, atol=1)
     view.release()
     session.release()
+
+
+def test_split_in_a_viewport_puts_the_divider_inside_it(gl_ctx):
+    """The window's 3D view is the dock space's central node: a viewport right of the panels;
+    the divider stays at its share of that viewport."""
+    session = RenderSession(sphere_scene(Environment.constant((0.3, 0.6, 0.9))), ctx=gl_ctx)
+    mirror = session.method("mirror")
+    view = SplitView(session.renderer)
+    offset = 20
+    target = gl_ctx.simple_framebuffer((SIZE[0] + offset, SIZE[1]))
+    target.clear(0.0, 0.0, 0.0, 1.0)
+    settings = SplitSettings(split=True, divider=0.25)
+    view.render(
+        session.gpu_scene,
+        mirror,
+        mirror,
+        session.camera,
+        SIZE,
+        target,
+        settings,
+        (offset, 0, *SIZE),
+    )
+    pixels = np.frombuffer(target.read(components=3), np.uint8).reshape(SIZE[1], -1, 3)
+    white = np.flatnonzero((pixels == 255).all(axis=(0, 2)))
+    assert white.tolist() == [offset + SIZE[0] // 4 - 1, offset + SIZE[0] // 4]
+    assert (pixels[:, :offset] == 0).all(), "nothing drawn left of the viewport"
+    target.release()
+    view.release()
+    session.release()

@@ -1,9 +1,12 @@
 """The real viewer (``python -m envstudio view``) in a subprocess under its own Xvfb server.
 
-Never skipped: without Xvfb the tests fail and say so. The screenshot is
-checked from its pixels: between the panels it equals a headless (EGL) render
-of the same scene and method, where the reflector covers the view's centre;
-the Method panel is ImGui's window colour blended over that render, with text.
+Never skipped: without Xvfb the tests fail and say so. Most runs go through
+tests/window_probe.py, which runs the viewer unchanged and writes its last frame's
+layout as JSON: the 3D view's rectangle (the dock space's central node), its GL
+viewport, the render size and each panel's rectangle. The screenshot is checked
+from its pixels: inside the view's rectangle it equals a headless (EGL) render
+of the same scene and method at the view's size; the docked Method panel is
+ImGui's window colour, with text.
 """
 
 from __future__ import annotations
@@ -25,11 +28,12 @@ from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.ui.app import CYCLE_FRAMES
-from envstudio.ui.panels import default_layout
+from envstudio.ui.docking import PANELS, ViewRect, gl_viewport
 
 WINDOW = (640, 480)
 FIRST_METHOD = "mirror"
 RUN_TIMEOUT_S = 60
+PROBE = Path(__file__).with_name("window_probe.py")
 
 
 @pytest.fixture(scope="module")
@@ -61,15 +65,22 @@ def xvfb() -> Iterator[str]:
             server.wait()
 
 
-def run_view(config_dir: Path, display: str | None, *options: str) -> subprocess.CompletedProcess:
-    """``python -m envstudio view *options`` with its own settings folder and ``display``."""
+def run_view(
+    config_dir: Path, display: str | None, *options: str, probe: Path | None = None
+) -> subprocess.CompletedProcess:
+    """``python -m envstudio view *options`` with its own settings folder and ``display``;
+    with ``probe``, through tests/window_probe.py, which writes the last frame's layout there."""
     env = dict(os.environ, ENVSTUDIO_CONFIG_DIR=str(config_dir))
     env.pop("WAYLAND_DISPLAY", None)
     env.pop("DISPLAY", None)
     if display:
         env["DISPLAY"] = display
+    if probe:
+        command = [sys.executable, str(PROBE), str(probe)]
+    else:
+        command = [sys.executable, "-m", "envstudio"]
     return subprocess.run(
-        [sys.executable, "-m", "envstudio", "view", *options],
+        [*command, "view", *options],
         env=env,
         capture_output=True,
         text=True,
@@ -82,14 +93,14 @@ def envstudio_lines(stream: str) -> list[str]:
     return [line for line in stream.splitlines() if line.startswith("envstudio:")]
 
 
-def headless_frames(method: str) -> tuple[np.ndarray, np.ndarray]:
-    """The default scene through EGL at the window size: (displayed uint8, reflector mask)."""
+def headless_frames(method: str, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """The default scene through EGL at ``size``: (displayed uint8, reflector mask)."""
     session = RenderSession(build_scene())
     try:
-        session.render_offscreen(method, WINDOW)
+        session.render_offscreen(method, size)
         displayed = session.read_ldr()
         session.renderer.display["background"] = False
-        session.render_offscreen(method, WINDOW)
+        session.render_offscreen(method, size)
         mask = session.read_hdr().sum(axis=2) > 0.0
     finally:
         session.release()
@@ -106,6 +117,19 @@ def imgui_window_colour() -> np.ndarray:
         imgui.destroy_context(context)
 
 
+def view_pixels(image: np.ndarray, record: dict) -> np.ndarray:
+    """The 3D view's pixels of a screenshot (row 0 at the top), from the probe's viewport."""
+    x, y, w, h = record["viewport"]
+    top = image.shape[0] - (y + h)
+    return image[top : top + h, x : x + w]
+
+
+def rect_pixels(rect: list[float]) -> tuple[slice, slice]:
+    """Rows and columns of a panel rectangle (points = pixels here), 4 pixels inside it."""
+    x, y, w, h = (int(v) for v in rect)
+    return slice(y + 4, y + h - 4), slice(x + 4, x + w - 4)
+
+
 def test_viewer_cycles_every_method_and_screenshot_shows_object_and_panel(xvfb, tmp_path):
     config = tmp_path / "config"
     config.mkdir()
@@ -114,17 +138,14 @@ def test_viewer_cycles_every_method_and_screenshot_shows_object_and_panel(xvfb, 
     # The cycle starts at FIRST_METHOD and is back there on the last frame.
     frames = CYCLE_FRAMES * len(methods) + 1
     shot = tmp_path / "shot.png"
+    probe = tmp_path / "probe.json"
 
     result = run_view(
         config,
         xvfb,
-        "--method",
-        FIRST_METHOD,
-        "--frames",
-        str(frames),
-        "--cycle-methods",
-        "--screenshot",
-        str(shot),
+        *("--method", FIRST_METHOD, "--frames", str(frames), "--cycle-methods"),
+        *("--screenshot", str(shot)),
+        probe=probe,
     )
 
     assert result.returncode == 0, result.stderr
@@ -138,35 +159,67 @@ def test_viewer_cycles_every_method_and_screenshot_shows_object_and_panel(xvfb, 
 
     image = np.round(read_image(shot) * 255.0).astype(np.int16)
     assert image.shape == (WINDOW[1], WINDOW[0], 3)
-    expected, reflector = headless_frames(FIRST_METHOD)
-    expected = expected.astype(np.int16)
-    layout = default_layout(WINDOW)
+    record = json.loads(probe.read_text())
+    expected, reflector = headless_frames(FIRST_METHOD, tuple(record["render_size"]))
 
-    # The object: the gap between the panel columns, around the centre, is the
-    # scene as rendered headless; the reflector fills much of it, non-uniformly.
-    left = int(layout["Method"][0] + layout["Method"][2]) + 2
-    right = int(layout["Stats"][0]) - 2
-    rows = slice(WINDOW[1] // 2 - 100, WINDOW[1] // 2 + 100)
-    gap = image[rows, left:right]
-    assert np.abs(gap - expected[rows, left:right]).max() <= 3
-    assert reflector[rows, left:right].mean() > 0.3, "the reflector is not in the view's centre"
-    reflector_pixels = gap[reflector[rows, left:right]]
-    assert reflector_pixels.std(axis=0).max() > 10.0, "the reflector is one flat colour"
+    # The object: the 3D view is the scene as rendered headless at the view's size; the
+    # reflector fills much of its centre, non-uniformly.
+    view = view_pixels(image, record)
+    np.testing.assert_array_equal(view, expected)
+    h, w = reflector.shape
+    centre = reflector[h // 4 : 3 * h // 4, w // 4 : 3 * w // 4]
+    assert centre.mean() > 0.3, "the reflector is not in the view's centre"
+    assert view[reflector].std(axis=0).max() > 10.0, "the reflector is one flat colour"
 
-    # The Method panel: body pixels are ImGui's window colour over the scene;
-    # bright text strokes run along it.
-    x, y, w, h = (int(v) for v in layout["Method"])
-    body = (slice(y + 30, y + h - 4), slice(x + 4, x + w - 4))
+    # The Method panel, docked beside the view: its body is ImGui's window colour over the
+    # cleared window; bright text strokes run along it.
+    body = rect_pixels(record["panels"]["Method"]["rect"])
     colour = imgui_window_colour()
-    blended = colour[:3] * 255.0 * colour[3] + expected[body] * (1.0 - colour[3])
-    panel_coloured = np.all(np.abs(image[body] - blended) <= 2.5, axis=2)
+    panel_coloured = np.all(np.abs(image[body] - colour[:3] * 255.0 * colour[3]) <= 2.5, axis=2)
     assert panel_coloured.mean() > 0.4, panel_coloured.mean()
     text = image[body].min(axis=2) > 200
     assert 0.01 < text.mean() < 0.3, text.mean()
-    columns = text.any(axis=0)
-    assert np.count_nonzero(columns[1:] != columns[:-1]) > 20, "no separate glyphs in the panel"
-    outside_panels = image[rows, left:right]
-    assert not np.all(outside_panels.min(axis=2) > 200), "the centre is covered by text"
+    strokes = np.count_nonzero(text[:, 1:] != text[:, :-1], axis=1)
+    assert strokes.max() > 20, "no separate glyphs along a line of the panel"
+
+
+def test_the_docked_panels_leave_the_3d_view_alone_and_the_layout_persists(xvfb, tmp_path):
+    """Issue 28: the panels are docked around the view (the dock space's central node), which
+    the scene fills at the central node's aspect ratio; the layout is saved and restored."""
+    config = tmp_path / "config"  # no settings: the default window (1280x800) and layout
+    shot = tmp_path / "shot.png"
+    probe = tmp_path / "probe.json"
+    options = ("--method", FIRST_METHOD, "--frames", "3")
+    result = run_view(config, xvfb, *options, "--screenshot", str(shot), probe=probe)
+    assert result.returncode == 0, result.stderr
+    record = json.loads(probe.read_text())
+
+    view = ViewRect(**record["view"])
+    assert record["window_size"] == [1280, 800]
+    assert view.width * view.height > 0.45 * 1280 * 800, "the view is less than half the window"
+    panels = record["panels"]
+    assert set(panels) == set(PANELS)
+    for name, panel in panels.items():
+        assert panel["docked"], f"{name} floats"
+        assert not view.overlaps(ViewRect(*panel["rect"])), f"{name} covers the view"
+    assert sum(panel["shown"] for panel in panels.values()) == len(PANELS) - 1, "one tab behind"
+    # the GL viewport is the central node in framebuffer pixels, rendered at its size
+    viewport = gl_viewport(view, record["window_size"], record["buffer_size"])
+    assert record["viewport"] == list(viewport)
+    assert record["render_size"] == list(viewport[2:])
+    assert abs(viewport[2] / viewport[3] - view.aspect) < 1.0 / viewport[3]
+
+    image = np.round(read_image(shot)[..., :3] * 255.0)
+    expected, _ = headless_frames(FIRST_METHOD, tuple(record["render_size"]))
+    np.testing.assert_array_equal(view_pixels(image, record), expected)
+
+    saved = json.loads((config / "settings.json").read_text())["imgui_ini"]
+    assert "[Docking][Data]" in saved and "CentralNode=1" in saved
+    again = tmp_path / "again.json"
+    result = run_view(config, xvfb, *options, probe=again)
+    assert result.returncode == 0, result.stderr
+    restored = json.loads(again.read_text())
+    assert restored["view"] == record["view"] and restored["panels"] == record["panels"]
 
 
 def test_corrupt_settings_warn_once_and_are_replaced(xvfb, tmp_path):
@@ -200,12 +253,18 @@ def test_no_display_exits_2_with_one_line(tmp_path):
 def test_with_the_panels_hidden_the_screenshot_is_the_headless_render(xvfb, tmp_path):
     """--hide-panels (Tab in the window): a clean view, pixel for pixel what `render` draws."""
     shot = tmp_path / "clean.png"
+    probe = tmp_path / "probe.json"
     result = run_view(
         tmp_path / "config",
         xvfb,
         *("--method", "hwconv", "--hide-panels", "--frames", "3", "--screenshot", str(shot)),
+        probe=probe,
     )
     assert result.returncode == 0, result.stderr
+    record = json.loads(probe.read_text())
+    width, height = record["window_size"]
+    assert record["view"] == {"x": 0.0, "y": 0.0, "width": width, "height": height}
+    assert record["viewport"] == [0, 0, *record["buffer_size"]]
     screen = read_image(shot)[..., :3]
     session = RenderSession(build_scene())
     try:

@@ -72,15 +72,18 @@ class SplitView:
         size: tuple[int, int],
         target: moderngl.Framebuffer,
         settings: SplitSettings,
+        viewport: tuple[int, int, int, int] | None = None,
     ) -> tuple[FrameStats, FrameStats]:
-        """Render A and B at ``size`` and compose them into ``target``."""
+        """Render A and B at ``size`` and compose them into ``viewport`` (x, y, w, h) of
+        ``target`` (default: (0, 0, *size))."""
         stats = []
         for renderer, method in ((self.renderer_a, method_a), (self.renderer_b, method_b)):
             renderer.timer.begin_frame()
             renderer.render_hdr(scene, method, camera, size)
             stats.append(FrameStats(dict(renderer.timer.times_ms), renderer.timer.clock))
         target.use()
-        self.ctx.viewport = (0, 0, *size)
+        viewport = viewport or (0, 0, *size)
+        self.ctx.viewport = viewport
         self.ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)
         program = self.programs.get("frame/split.glsl")
         self.renderer_a.hdr_texture.use(location=0)
@@ -90,7 +93,8 @@ class SplitView:
         set_uniform(program, "u_hdr_b", 1)
         set_uniform(program, "u_exposure", float(display["exposure"]))
         set_uniform(program, "u_tonemap", TONEMAPS.index(display["tonemap"]))
-        set_uniform(program, "u_divider", float(settings.divider * size[0]))
+        # gl_FragCoord counts from the target's corner, not the viewport's
+        set_uniform(program, "u_divider", float(viewport[0] + settings.divider * viewport[2]))
         set_uniform(program, "u_split", settings.split)
         set_uniform(program, "u_heat", settings.heat)
         set_uniform(program, "u_heat_scale", float(settings.heat_scale))

@@ -1,15 +1,22 @@
-"""The desktop viewer: the scene rendered by the selected method, with ImGui panels on top.
+"""The desktop viewer: the scene rendered by the selected method, with ImGui panels docked
+around it.
 
 Each frame::
 
     run the jobs announced last frame (file loads)       DeferredWork.run_due
     poll "Open..." dialogs; cycle methods; turntable
-    FrameRenderer.render → window framebuffer            capture without UI / EXR here
-    panels → imgui.render → ImGuiRenderer.render         capture with UI here
+    imgui.new_frame → menu bar, dock space → the view's rectangle (ui/docking.py)
+    panels, status line
+    FrameRenderer.render → the view's rectangle          capture without UI / EXR here
+    imgui.render → ImGuiRenderer.render                  capture with UI here
+
+The 3D view is the dock space's central node: it is rendered at that node's size
+(so the camera's aspect ratio follows it) into that rectangle of the window;
+with the panels hidden (Tab) it is the whole window.
 
 Input goes to ImGui first; the camera and the shortcuts act only when ImGui
 does not want the mouse / keyboard. Shortcuts: 1–9 pick a method, R resets the
-camera, F12 saves a PNG, Escape quits.
+camera, Tab hides and shows the panels, F12 saves a PNG, Escape quits.
 
 Settings (method, parameter values per method, display, scene, environment,
 mesh, camera, rotation, turntable, window size, panel layout) are restored on
@@ -55,6 +62,7 @@ from envstudio.ui.capture import (
     save,
 )
 from envstudio.ui.compare_panel import CompareState, compare_panel
+from envstudio.ui.docking import DockLayout, ViewRect, gl_viewport
 from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.imgui_input import ImGuiInput
 from envstudio.ui.imgui_renderer import ImGuiRenderer
@@ -326,13 +334,22 @@ class Viewer(WindowConfig):
         if warnings or problems:
             self.status.error("\n".join([*warnings, *problems]))
         imgui.create_context()
-        imgui.get_io().set_ini_filename(None)
+        io = imgui.get_io()
+        io.set_ini_filename(None)  # the layout is kept in the settings file
+        io.config_flags |= imgui.ConfigFlags_.docking_enable
         load_ui_font()
         if settings.imgui_ini:
             imgui.load_ini_settings_from_memory(settings.imgui_ini)
         implot.create_context()
-        self.gui_input = ImGuiInput(imgui.get_io(), keys)
+        self.gui_input = ImGuiInput(io, keys)
         self.gui = ImGuiRenderer(ctx)
+        self.layout = DockLayout()
+        self.view = ViewRect(0.0, 0.0, float(wnd.size[0]), float(wnd.size[1]))
+        """The 3D view's rectangle in window points (the dock space's central node)."""
+        self.gui_input.prepare_frame(wnd.size, wnd.buffer_size, 1.0 / 60.0)
+        imgui.new_frame()
+        self.layout.warm_up()
+        imgui.end_frame()
 
     def _restore(self, settings: ViewerSettings, start: StartScene) -> list[str]:
         """Apply the saved display, camera, rotation and turntable; returns what was rejected."""
@@ -422,6 +439,44 @@ class Viewer(WindowConfig):
         size = self.wnd.buffer_size
         if size[0] < 1 or size[1] < 1:
             return
+        self.gui_input.prepare_frame(self.wnd.size, size, frametime)
+        imgui.new_frame()
+        self.view = self.layout.frame(self.panels_shown)
+        viewport = gl_viewport(self.view, self.wnd.size, size)
+        view_size = viewport[2:]
+        if self.panels_shown:
+            self._panels(view_size)
+        if self.layout.toggle_panels:  # View > Hide panels; from the next frame
+            self.panels_shown = False
+        self.status.draw(self.view)
+        screen = self.ctx.screen
+        if viewport != (0, 0, *size):  # the panels' background
+            screen.use()
+            screen.clear(0.0, 0.0, 0.0, 1.0, viewport=(0, 0, *size))
+        request, self._capture_request = self._capture_request, None
+        if view_size[0] >= 1 and view_size[1] >= 1:
+            self._render_view(view_size, viewport, frametime)
+            if request and not request.with_ui:
+                self._take_capture(request, view_size, viewport[:2])
+
+        imgui.render()
+        self.wnd.use()
+        self.gui.render(imgui.get_draw_data())
+        self.jobs.mark_shown()
+        if request and request.with_ui:
+            self._take_capture(request, size)
+
+        self.frames_drawn += 1
+        if self.options.frames and self.frames_drawn >= self.options.frames:
+            if self.options.screenshot:
+                save(self.options.screenshot, read_framebuffer(screen, size))
+            self.wnd.close()
+
+    def _render_view(
+        self, size: tuple[int, int], viewport: tuple[int, int, int, int], frametime: float
+    ) -> None:
+        """The scene by the method on show (or split against another) at ``size``, into
+        ``viewport`` of the window; the frame's times go to the Stats history."""
         screen = self.ctx.screen
         try:
             if self.compare.other:
@@ -439,6 +494,7 @@ class Viewer(WindowConfig):
                     size,
                     screen,
                     self.compare.settings,
+                    viewport,
                 )
             else:
                 stats = self.session.renderer.render(
@@ -447,7 +503,7 @@ class Viewer(WindowConfig):
                     self.session.camera,
                     size,
                     screen,
-                    (0, 0, *size),
+                    viewport,
                 )
         except (UserError, ShaderCompileError) as exc:
             # a bad value, or a shader this driver cannot compile (e.g. the reference
@@ -456,27 +512,6 @@ class Viewer(WindowConfig):
         else:
             self._render_error = None
             self.history.add(frametime * 1e3, stats)
-        request, self._capture_request = self._capture_request, None
-        if request and not request.with_ui:
-            self._take_capture(request, size)
-
-        self.gui_input.prepare_frame(self.wnd.size, size, frametime)
-        imgui.new_frame()
-        if self.panels_shown:
-            self._panels(size)
-        self.status.draw()
-        imgui.render()
-        self.wnd.use()
-        self.gui.render(imgui.get_draw_data())
-        self.jobs.mark_shown()
-        if request and request.with_ui:
-            self._take_capture(request, size)
-
-        self.frames_drawn += 1
-        if self.options.frames and self.frames_drawn >= self.options.frames:
-            if self.options.screenshot:
-                save(self.options.screenshot, read_framebuffer(screen, size))
-            self.wnd.close()
 
     def _report_render_error(self, message: str) -> None:
         """Show a method's one-line error (and print it once) instead of quitting."""
@@ -526,12 +561,16 @@ class Viewer(WindowConfig):
             return
         self._capture_request = CaptureRequest(path, self.capture.with_ui and fmt == "png")
 
-    def _take_capture(self, request: CaptureRequest, size: tuple[int, int]) -> None:
+    def _take_capture(
+        self, request: CaptureRequest, size: tuple[int, int], origin: tuple[int, int] = (0, 0)
+    ) -> None:
+        """Save ``request``: the HDR frame, or the ``size`` pixels of the window at ``origin``
+        (the view alone, or the whole window with the UI)."""
         try:
             if request.is_hdr:
                 pixels = self.session.read_hdr()
             else:
-                pixels = read_framebuffer(self.ctx.screen, size)
+                pixels = read_framebuffer(self.ctx.screen, size, origin)
             path = save(request.path, pixels)
         except UserError as exc:
             self.status.error(str(exc))
@@ -566,7 +605,8 @@ class Viewer(WindowConfig):
         """A press starts a camera gesture unless it was over a panel."""
         self.gui_input.on_mouse_press_event(x, y, button)
         over_panel = self.gui_input.want_capture_mouse
-        on_divider = not over_panel and self.compare.grab(x, self.wnd.size[0])
+        view = self.view
+        on_divider = not over_panel and self.compare.grab(x - view.x, view.width)
         self.camera_control.press(button, self.wnd.modifiers.shift, over_panel or on_divider)
 
     def on_mouse_release_event(self, x: int, y: int, button: int) -> None:
@@ -578,8 +618,8 @@ class Viewer(WindowConfig):
     def on_mouse_drag_event(self, x: int, y: int, dx: int, dy: int) -> None:
         """Drags orbit or pan the camera (if the gesture started outside the panels)."""
         self.gui_input.on_mouse_drag_event(x, y, dx, dy)
-        self.compare.drag(x, self.wnd.size[0])
-        self.camera_control.drag(self.session.camera, dx, dy, self.wnd.size[1])
+        self.compare.drag(x - self.view.x, self.view.width)
+        self.camera_control.drag(self.session.camera, dx, dy, self.view.height)
 
     def on_mouse_scroll_event(self, x_offset: float, y_offset: float) -> None:
         """The wheel zooms unless it is over a panel."""

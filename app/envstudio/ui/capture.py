@@ -73,10 +73,13 @@ def capture_path(folder: str | Path, scene: str, method: str, fmt: str) -> Path:
     return path
 
 
-def read_framebuffer(fbo: moderngl.Framebuffer, size: tuple[int, int]) -> npt.NDArray[np.uint8]:
-    """(h, w, 3) uint8 of the lower-left ``size`` of ``fbo``, row 0 at the top."""
+def read_framebuffer(
+    fbo: moderngl.Framebuffer, size: tuple[int, int], origin: tuple[int, int] = (0, 0)
+) -> npt.NDArray[np.uint8]:
+    """(h, w, 3) uint8 of the ``size`` pixels of ``fbo`` from ``origin`` (its lower-left
+    corner, GL pixels), row 0 at the top."""
     width, height = size
-    data = fbo.read(viewport=(0, 0, width, height), components=3, alignment=1)
+    data = fbo.read(viewport=(*origin, width, height), components=3, alignment=1)
     return np.frombuffer(data, dtype=np.uint8).reshape(height, width, 3)[::-1]
 
 

@@ -14,11 +14,12 @@ from imgui_bundle import imgui
 from envstudio.core.colormap import magma
 from envstudio.engine.method import Method
 from envstudio.engine.split_view import SplitSettings
+from envstudio.ui.docking import PANEL_FLAGS
 
 OFF = "off"
 """Combo entry for no comparison."""
 GRAB_PIXELS = 6.0
-"""How close to the divider (window pixels) a press grabs it."""
+"""How close to the divider (window points) a press grabs it."""
 
 
 @dataclass
@@ -31,23 +32,22 @@ class CompareState:
     match: bool = True
     match_note: str | None = None
 
-    def grab(self, x: float, window_width: float) -> bool:
-        """Start dragging if a press at ``x`` is on the divider; returns whether it was."""
-        on_divider = abs(x - self.settings.divider * window_width) <= GRAB_PIXELS
+    def grab(self, x: float, view_width: float) -> bool:
+        """Start dragging if a press at ``x`` (from the 3D view's left edge) is on the divider;
+        returns whether it was."""
+        on_divider = abs(x - self.settings.divider * view_width) <= GRAB_PIXELS
         self.dragging = bool(self.other and self.settings.split and on_divider)
         return self.dragging
 
-    def drag(self, x: float, window_width: float) -> None:
-        """Move the divider to ``x`` while dragging."""
-        if self.dragging and window_width > 0:
-            self.settings.divider = min(max(x / window_width, 0.0), 1.0)
+    def drag(self, x: float, view_width: float) -> None:
+        """Move the divider to ``x`` (from the 3D view's left edge) while dragging."""
+        if self.dragging and view_width > 0:
+            self.settings.divider = min(max(x / view_width, 0.0), 1.0)
 
 
 def compare_panel(methods: dict[str, type[Method]], current: str, state: CompareState) -> None:
     """Edit ``state``: the method compared against, split, divider, heat map and its scale."""
-    imgui.set_next_window_pos((310.0, 8.0), imgui.Cond_.first_use_ever)
-    imgui.set_next_window_size((300.0, 0.0), imgui.Cond_.first_use_ever)
-    if imgui.begin("Compare")[0]:
+    if imgui.begin("Compare", None, PANEL_FLAGS)[0]:
         names = [OFF, *(n for n in methods if n != current)]
         chosen = state.other if state.other in names else OFF
         imgui.set_next_item_width(-1.0)

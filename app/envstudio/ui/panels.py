@@ -4,15 +4,8 @@ Panels read and write the objects they are given and keep no copy of their
 state. Work that blocks (loading files) is submitted to :class:`DeferredWork`
 so the status line can say what is happening before it starts.
 
-Default layout (first run; afterwards ImGui's saved layout wins)::
-
-    +---------+---------------------------+---------+
-    | Method  |                           | Stats   |
-    |         |        3D view            |         |
-    +---------+                           +---------+
-    | Scene   |                           | Capture |
-    |         |                           |         |
-    +---------+---------------------------+---------+
+The panels are docked around the 3D view (:mod:`envstudio.ui.docking` builds the
+default layout and keeps them off the view); afterwards ImGui's saved layout wins.
 """
 
 from __future__ import annotations
@@ -28,6 +21,7 @@ from envstudio.engine.session import material_values
 from envstudio.errors import UserError
 from envstudio.scene.graph import Scene
 from envstudio.ui.capture import FORMATS
+from envstudio.ui.docking import PANEL_FLAGS
 from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.imgui_renderer import ImGuiRenderer
 from envstudio.ui.jobs import DeferredWork
@@ -38,43 +32,13 @@ from envstudio.ui.status import StatusLine
 
 SCENE_MESH = "scene's own"
 """Mesh picker entry bringing back the scene file's reflectors."""
-PANEL_WIDTH = 290.0
-MARGIN = 8.0
 LABEL_WIDTH = 110.0
 """Room kept right of the widgets for their labels."""
-# Share of the column height taken by the upper panel (Method, Stats).
-_UPPER_SHARE = {"Method": 0.42, "Stats": 0.55}
-_COLUMNS = {
-    "Method": ("left", True),
-    "Scene": ("left", False),
-    "Stats": ("right", True),
-    "Capture": ("right", False),
-}
-
-
-def default_layout(display: tuple[float, float]) -> dict[str, tuple[float, float, float, float]]:
-    """Panel name → (x, y, width, height) of the first-run layout in a ``display`` (w, h)."""
-    width, height = display
-    column = height - 3 * MARGIN
-    layout = {}
-    for name, (side, upper) in _COLUMNS.items():
-        x = MARGIN if side == "left" else width - PANEL_WIDTH - MARGIN
-        share = _UPPER_SHARE["Method" if side == "left" else "Stats"]
-        top = round(column * share)
-        if upper:
-            layout[name] = (x, MARGIN, PANEL_WIDTH, top)
-        else:
-            layout[name] = (x, 2 * MARGIN + top, PANEL_WIDTH, column - top)
-    return layout
 
 
 def _begin(name: str) -> bool:
-    """Begin panel ``name`` at its default place on first use; returns whether it is open."""
-    display = imgui.get_io().display_size
-    x, y, w, h = default_layout((display.x, display.y))[name]
-    imgui.set_next_window_pos((x, y), imgui.Cond_.first_use_ever)
-    imgui.set_next_window_size((w, h), imgui.Cond_.first_use_ever)
-    expanded = imgui.begin(name)[0]
+    """Begin panel ``name`` (docked where the layout puts it); returns whether it is open."""
+    expanded = imgui.begin(name, None, PANEL_FLAGS)[0]
     imgui.push_item_width(-LABEL_WIDTH)
     return expanded
 

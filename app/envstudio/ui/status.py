@@ -1,4 +1,4 @@
-"""The status line along the bottom of the window: busy work, errors and notes.
+"""The status line along the bottom of the 3D view: busy work, errors and notes.
 
 Errors are one-line :class:`~envstudio.errors.UserError` messages (several on
 separate lines) shown in red until dismissed or replaced; a note (a saved
@@ -9,6 +9,8 @@ the next frame.
 from __future__ import annotations
 
 from imgui_bundle import imgui
+
+from envstudio.ui.docking import ViewRect
 
 ERROR_COLOUR = (1.0, 0.35, 0.3, 1.0)
 BUSY_COLOUR = (1.0, 0.8, 0.3, 1.0)
@@ -41,18 +43,22 @@ class StatusLine:
         """Show ``message`` in grey."""
         self.note_text = message
 
-    def draw(self) -> None:
-        """Draw the line if there is anything to say (between ``new_frame`` and ``render``)."""
+    def draw(self, area: ViewRect | None = None) -> None:
+        """Draw the line, if there is anything to say, at the bottom-left of ``area`` (the
+        3D view; default the whole display), between ``new_frame`` and ``render``."""
         if not (self.error_text or self.note_text or self.busy_text):
             return
-        display = imgui.get_io().display_size
-        imgui.set_next_window_pos((_MARGIN, display.y - _MARGIN), imgui.Cond_.always, (0.0, 1.0))
+        if area is None:
+            display = imgui.get_io().display_size
+            area = ViewRect(0.0, 0.0, display.x, display.y)
+        corner = (area.x + _MARGIN, area.y + area.height - _MARGIN)
+        imgui.set_next_window_pos(corner, imgui.Cond_.always, (0.0, 1.0))
         imgui.set_next_window_size_constraints(
-            (0.0, 0.0), (max(display.x - 2 * _MARGIN, 1.0), max(display.y / 2, 1.0))
+            (0.0, 0.0), (max(area.width - 2 * _MARGIN, 1.0), max(area.height / 2, 1.0))
         )
         imgui.set_next_window_bg_alpha(0.85)
         imgui.begin("##status", None, _FLAGS)
-        imgui.push_text_wrap_pos(display.x - 4 * _MARGIN)
+        imgui.push_text_wrap_pos(area.width - 4 * _MARGIN)  # window-local
         if self.busy_text:
             imgui.text_colored(BUSY_COLOUR, f"busy: {self.busy_text}")
         if self.error_text:
