@@ -273,3 +273,44 @@ def test_with_the_panels_hidden_the_screenshot_is_the_headless_render(xvfb, tmp_
     finally:
         session.release()
     np.testing.assert_array_equal(np.round(screen * 255.0), displayed)
+
+
+def test_the_reference_in_the_window_shows_no_black_reflector_after_ten_frames(xvfb, tmp_path):
+    """Issue 28: the reference's first pass covers the reflector from the first frames on.
+    After 10 frames (the first batch far from done) every reflector pixel shown black under
+    the non-black studio environment is one the reference's own estimate makes black: on
+    silhouettes, where every footprint point's shading normal faces away (as in a path
+    tracer; shaders/reference/accumulate.glsl), its first whole batch is black too."""
+    config = tmp_path / "config"
+    config.mkdir()
+    (config / "settings.json").write_text(json.dumps({"window_size": [960, 600]}))
+    shot = tmp_path / "shot.png"
+    probe = tmp_path / "probe.json"
+    result = run_view(
+        config,
+        xvfb,
+        *("--method", "reference", "--frames", "10", "--screenshot", str(shot)),
+        probe=probe,
+    )
+    assert result.returncode == 0, result.stderr
+    assert envstudio_lines(result.stderr) == []
+    record = json.loads(probe.read_text())
+    size = tuple(record["render_size"])
+    view = view_pixels(np.round(read_image(shot)[..., :3] * 255.0), record)
+
+    session = RenderSession(build_scene())
+    try:
+        assert session.scene.environment.radiance.max(axis=-1).min() > 0.0, "a black texel"
+        reference = session.method("reference")
+        session.render_offscreen(reference, size)  # one whole batch, no frame budget
+        assert reference.status.batches == 1
+        estimate_black = session.read_ldr().max(axis=-1) == 0
+        session.renderer.display["background"] = False
+        session.render_offscreen("mirror", size)
+        reflector = session.read_hdr().sum(axis=-1) > 0.0
+    finally:
+        session.release()
+    shown_black = reflector & (view.max(axis=-1) == 0)
+    assert shown_black.sum() < 1e-3 * reflector.sum()
+    wrong = np.argwhere(shown_black & ~estimate_black)
+    assert len(wrong) == 0, f"black in the window, not in the estimate: {wrong[:10].tolist()}"
