@@ -55,6 +55,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
     parser.add_argument("--out", required=True, help="folder for the images, table and index.html")
     parser.add_argument(
+        "--no-decompose",
+        dest="decompose",
+        action="store_false",
+        help="where the reference traces, do not also accumulate it untraced (no approximation "
+        "error and scene-only columns)",
+    )
+    parser.add_argument(
         "--no-cache",
         dest="cache",
         action="store_false",
@@ -104,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
             time_limit_s=time_limit,
             extras_dir=out,
             ssaa=args.ssaa,
+            decompose=args.decompose,
         )
     finally:
         session.release()

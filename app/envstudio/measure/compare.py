@@ -65,7 +65,7 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
-from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
+from envstudio.measure.ground_truth import SCENE_EFFECTS, ConvergenceStatus, GroundTruth
 from envstudio.measure.matching import match_glossiness
 from envstudio.measure.stopping import (
     NOISE_RULE,
@@ -234,6 +234,15 @@ class MethodResult:
     reference_model : str or None
         The reflectance model of the reference it was measured against (None: the
         ground truth renders no reference of its model, and it has no numbers).
+    approximation : ImageMetrics or None
+        Against the untraced reference of its model (the environment-map model the
+        technique approximates), when the reference traces; ``metrics`` is then
+        the scene error, against the traced one.
+    approximation_error : float
+        Median relative error against the untraced reference (NaN without one).
+    scene_only_error : float
+        Median relative error of the untraced reference against the traced one: what
+        no environment map shows (NaN without an untraced reference).
     """
 
     name: str
@@ -249,6 +258,9 @@ class MethodResult:
     median_relative_error: float = float("nan")
     reliable: bool = True
     reference_model: str | None = None
+    approximation: ImageMetrics | None = None
+    approximation_error: float = float("nan")
+    scene_only_error: float = float("nan")
 
 
 @dataclass
@@ -280,6 +292,9 @@ class Comparison:
     references : dict
         Reflectance model → its reference (``reference`` is the first), one per model of
         the methods compared.
+    untraced : dict
+        Reflectance model → its untraced reference, for the models whose reference
+        traces (empty with ``--no-decompose`` or an untraced reference).
     """
 
     scene: str
@@ -293,6 +308,7 @@ class Comparison:
     extras: dict[str, list[ReportExtra]] = field(default_factory=dict)
     ssaa: int = 1
     references: dict[str, ReferenceRun] = field(default_factory=dict)
+    untraced: dict[str, ReferenceRun] = field(default_factory=dict)
 
     @property
     def reliable(self) -> bool:
@@ -362,6 +378,7 @@ def run_comparison(
     time_limit_s: float | None = None,
     extras_dir: Path | None = None,
     ssaa: int = 1,
+    decompose: bool = True,
 ) -> Comparison:
     """Render ``names`` and the reference at the session's camera and compare them.
 
@@ -394,6 +411,10 @@ def run_comparison(
         Render each method at ``ssaa`` × ``ssaa`` samples per pixel and box-filter
         them, as the reference averages each pixel's footprint (1: the pixel centre).
         Its time per frame is still taken at one sample per pixel, as a user's frame.
+    decompose
+        Where the reference traces (ground_truth.SCENE_EFFECTS), also accumulate it
+        untraced and report each method's approximation error against that, its
+        scene error against the traced one, and the scene-only share between them.
 
     Raises
     ------
@@ -423,11 +444,16 @@ def run_comparison(
     rule = choose_rule(list(names), plan.methods[truth], strict)
     base = dict(reference.values.as_dict())
     runs: dict[str, ReferenceRun] = {}
+    untraced: dict[str, ReferenceRun] = {}
     for model, members in groups.items():
         reference.values.update(base)
         reference.values.update(_reference_values(session, reference, model, members, base))
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
         runs[model], mask = _converge(session, reference, size, progress, cache, judge)
+        if decompose and SCENE_EFFECTS in reference.values and reference.values[SCENE_EFFECTS]:
+            reference.values[SCENE_EFFECTS] = False
+            judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
+            untraced[model], _ = _converge(session, reference, size, progress, cache, judge)
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
     model_of[truth] = first
@@ -456,7 +482,15 @@ def run_comparison(
             display=display,
             reference_model=model_of.get(name),
         )
-        results.append(_judge(result, own, mask, truth) if own else _without_truth(result))
+        if own is None:
+            results.append(_without_truth(result))
+            continue
+        results.append(_judge(result, own, mask, truth))
+        approximation = untraced.get(model_of[name])
+        if approximation is not None:
+            result.approximation = compare_images(display, approximation.display, mask)
+            result.approximation_error = median_error(hdr, approximation.hdr, mask)
+            result.scene_only_error = median_error(approximation.hdr, own.hdr, mask)
     extras = _report_extras(session, list(rendered), extras_dir)
     camera = session.camera
     return Comparison(
@@ -471,6 +505,7 @@ def run_comparison(
         extras=extras,
         ssaa=ssaa,
         references=runs,
+        untraced=untraced,
     )
 
 

@@ -91,11 +91,17 @@ class ConvergenceStatus:
         return f"{self.samples} spp{noise}, half-change {change}: {state}"
 
 
+#: The ground truth's bool parameter that turns on what no environment map shows.
+SCENE_EFFECTS = "trace"
+
+
 class GroundTruth(Protocol):
     """What ``compare``, its stopping rule and its cache use of the ground-truth method.
 
     Besides the :class:`~envstudio.engine.method.Method` contract: parameters
-    ``samples``, ``max_samples``, ``tolerance`` and ``time_limit``.
+    ``samples``, ``max_samples``, ``tolerance`` and ``time_limit``, and
+    :data:`SCENE_EFFECTS`, on when it renders what no environment map shows
+    (self-occlusion, interreflection) and off for the environment-map model itself.
     """
 
     name: str

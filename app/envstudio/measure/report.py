@@ -63,6 +63,10 @@ METRIC_NOTES = {
     "ssim": "scikit-image, Gaussian window sigma 1.5, population covariance, "
     "mean of the SSIM map over the mask",
     "flip": "LDR-FLIP (flip-evaluator, 67 pixels per degree), mean over the mask",
+    "errors": "median relative luminance error of the linear frames over the mask; "
+    "approximation: against the untraced reference (the environment-map model the "
+    "technique approximates); scene: against the traced one (PSNR, SSIM, FLIP too); scene "
+    "only: the untraced reference against the traced one, what no environment map shows",
 }
 
 
@@ -154,16 +158,22 @@ def format_table(comparison: Comparison) -> str:
             f"reference ({model}): {_run_line(run)}\n"
             for model, run in list(_references(comparison).items())[1:]
         ),
-        "| method | PSNR (dB) | SSIM | FLIP | ms/frame | reliable | reference | "
-        "matched parameters |",
-        "|:--|--:|--:|--:|--:|:--|:--|:--|",
+        *(
+            f"reference ({model}, untraced): {_run_line(run)}\n"
+            for model, run in comparison.untraced.items()
+        ),
+        "| method | PSNR (dB) | SSIM | FLIP | approximation error | scene error | scene only | "
+        "ms/frame | reliable | reference | matched parameters |",
+        "|:--|--:|--:|--:|--:|--:|--:|--:|:--|:--|:--|",
     ]
     for result in comparison.results:
         m = result.metrics
         mark = "" if result.reliable else UNRELIABLE
         lines.append(
             f"| {result.name} | {_psnr_text(m.psnr_db)}{mark} | {_fixed(m.ssim)}{mark} | "
-            f"{_fixed(m.flip)}{mark} | {result.frame_ms['median_ms']:.2f} | "
+            f"{_fixed(m.flip)}{mark} | {_percent_or_dash(result.approximation_error)} | "
+            f"{_percent_or_dash(result.median_relative_error)} | "
+            f"{_percent_or_dash(result.scene_only_error)} | {result.frame_ms['median_ms']:.2f} | "
             f"{'yes' if result.reliable else 'no'} | {_model_text(result)} | "
             f"{_matched_text(result)} |"
         )
@@ -173,6 +183,7 @@ def format_table(comparison: Comparison) -> str:
     lines += [
         f"Metrics on the {METRIC_NOTES['domain']}. PSNR: {METRIC_NOTES['psnr_db']}; SSIM: "
         f"{METRIC_NOTES['ssim']}; FLIP: {METRIC_NOTES['flip']}.",
+        f"Errors: {METRIC_NOTES['errors']}",
         "ms/frame: wall clock with a GL finish at both ends; "
         + "; ".join(sorted({f"{r.name}: {r.timing}" for r in comparison.results})),
     ]
@@ -238,6 +249,16 @@ def to_json(comparison: Comparison) -> dict:
             }
             for model, run in _references(comparison).items()
         },
+        "untraced_references": {
+            model: {
+                "parameters": run.parameters,
+                "samples": run.status.samples,
+                "converged": run.status.converged,
+                "wall_s": run.wall_s,
+                "relative_standard_error": _number(run.relative_standard_error),
+            }
+            for model, run in comparison.untraced.items()
+        },
         "methods": {
             r.name: {
                 "parameters": r.parameters,
@@ -249,6 +270,16 @@ def to_json(comparison: Comparison) -> dict:
                 "reference_model": r.reference_model,
                 "reliable": r.reliable,
                 "median_relative_error": _number(r.median_relative_error),
+                "scene_error": _number(r.median_relative_error),
+                "approximation": None
+                if r.approximation is None
+                else {
+                    "psnr_db": _number(r.approximation.psnr_db),
+                    "ssim": _number(r.approximation.ssim),
+                    "flip": _number(r.approximation.flip),
+                    "median_relative_error": _number(r.approximation_error),
+                },
+                "scene_only_error": _number(r.scene_only_error),
                 "frame_ms": r.frame_ms,
                 "timing": r.timing,
                 "files": _files(r.name),
@@ -313,7 +344,8 @@ figcaption {{ font-size: 12px; color: #aaa; }}
 <p>reference: {esc(_reference_line(comparison))}</p>
 {table}
 {warning}
-<p>Metrics on the {esc(METRIC_NOTES["domain"])}. Heat maps: FLIP error over [0, 1];
+<p>Metrics on the {esc(METRIC_NOTES["domain"])}. Errors: {esc(METRIC_NOTES["errors"])}.
+Heat maps: FLIP error over [0, 1];
 relative luminance error of the linear frames over [0, {HEAT_SCALE:g}]; grey: not measured.</p>
 <div class="legend"><span>0</span><div class="scale"></div><span>top of scale</span></div>
 {"".join(f'<div class="row">{row}</div>' for row in rows)}
@@ -333,6 +365,9 @@ def _html_table(comparison: Comparison) -> str:
             f'<td class="n">{_psnr_text(m.psnr_db)}{mark}</td>',
             f'<td class="n">{_fixed(m.ssim)}{mark}</td>',
             f'<td class="n">{_fixed(m.flip)}{mark}</td>',
+            f'<td class="n">{_percent_or_dash(r.approximation_error)}</td>',
+            f'<td class="n">{_percent_or_dash(r.median_relative_error)}</td>',
+            f'<td class="n">{_percent_or_dash(r.scene_only_error)}</td>',
             f'<td class="n">{r.frame_ms["median_ms"]:.2f}</td>',
             f"<td>{'yes' if r.reliable else 'no'}</td>",
             f"<td>{html.escape(_model_text(r))}</td>",
@@ -346,6 +381,9 @@ def _html_table(comparison: Comparison) -> str:
             "PSNR (dB)",
             "SSIM",
             "FLIP",
+            "approximation error",
+            "scene error",
+            "scene only",
             "ms/frame",
             "reliable",
             "reference",
@@ -433,6 +471,10 @@ def _rule_text(rule: str) -> str:
     if rule == NOISE_RULE:
         return f"noise < {NOISE_SHARE:g} × each method's median relative error (default)"
     return "half-change < tolerance (strict)"
+
+
+def _percent_or_dash(value: float) -> str:
+    return "–" if not np.isfinite(value) else f"{100 * value:.2f} %"
 
 
 def _percent(value: float) -> str:
