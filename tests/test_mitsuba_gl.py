@@ -76,7 +76,7 @@ from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
-from envstudio.scene.primitives import uv_sphere
+from envstudio.scene.primitives import torus_knot, uv_sphere
 
 #: Our batches and samples per batch: 256 estimates per pixel.
 BATCHES, SAMPLES = 16, 16
@@ -149,8 +149,21 @@ def bunny_scene() -> tuple[Scene, tuple[int, int]]:
     return Scene(Environment(sky_and_lamp()), [Node("bunny", mesh)], camera, "bunny"), (40, 40)
 
 
-def reference(ctx, scene: Scene, size, material: dict, pixel_filter: bool):
-    """Our traced reference after :data:`BATCHES` independent batches.
+def knot_scene() -> tuple[Scene, tuple[int, int]]:
+    """The (2, 3) torus knot (4160 triangles, smooth normals), fitted into the unit sphere, 48².
+
+    Its strands come within 0.03 of one another (tube radius 0.4, before fitting):
+    most of the surface looks into a crevice, the strongly self-occluding case of issue 27.
+    """
+    mesh = torus_knot().fitted(1.0)
+    camera = OrbitCamera(azimuth=30.0, elevation=25.0, distance=2.6, fov_y=45.0)
+    return Scene(Environment(sky_and_lamp()), [Node("knot", mesh)], camera, "knot"), (48, 48)
+
+
+def reference(
+    ctx, scene: Scene, size, material: dict, pixel_filter: bool, batches=BATCHES, samples=SAMPLES
+):
+    """Our traced reference after ``batches`` independent batches of ``samples``.
 
     Parameters
     ----------
@@ -176,24 +189,33 @@ def reference(ctx, scene: Scene, size, material: dict, pixel_filter: bool):
             "pixel_filter": pixel_filter,
             "sequence": "random",
             "adaptive": False,
-            "samples": SAMPLES,
+            "samples": samples,
             "max_samples": 10**6,
             "tolerance": 1e-5,
             **material,
         }
     )
     session.renderer.display["background"] = False
-    for _ in range(BATCHES):
+    for _ in range(batches):
         session.render_offscreen(method, size)
     estimate = method.estimate().astype(np.float64)
     error = method.standard_error().astype(np.float64)
     covered = method.coverage()
     session.release()
-    assert method.status.batches == BATCHES
+    assert method.status.batches == batches
     return estimate, error, covered
 
 
-def mitsuba(scene: Scene, size, bsdf: dict, depth: int, pixel_filter: bool, covered, threshold):
+def mitsuba(
+    scene: Scene,
+    size,
+    bsdf: dict,
+    depth: int,
+    pixel_filter: bool,
+    covered,
+    threshold,
+    renders=FOOTPRINT_RENDERS,
+):
     """Mitsuba's image of the same scene and the interior pixels to compare.
 
     Parameters
@@ -210,6 +232,8 @@ def mitsuba(scene: Scene, size, bsdf: dict, depth: int, pixel_filter: bool, cove
         Our reference's coverage.
     threshold : float
         Least shading n·v at the pixel centre of an interior pixel.
+    renders : int
+        Independent footprint renders of :data:`FOOTPRINT_SPP` samples.
 
     Returns
     -------
@@ -223,7 +247,7 @@ def mitsuba(scene: Scene, size, bsdf: dict, depth: int, pixel_filter: bool, cove
     n_dot_v = np.nan_to_num(n_dot_v, nan=-1.0)
     interior = covered & (n_dot_v > threshold)
     if pixel_filter:
-        estimate = ms.render_footprint(mi_scene, FOOTPRINT_SPP, FOOTPRINT_RENDERS, seed=1)
+        estimate = ms.render_footprint(mi_scene, FOOTPRINT_SPP, renders, seed=1)
     else:
         estimate = ms.render_centres(mi_scene, CENTRE_SPP, mask=interior, seed=1)
     return estimate, interior
@@ -254,7 +278,18 @@ def agreement(ours, ours_error, theirs, theirs_error, mask) -> dict:
     }
 
 
-def compare(ctx, scene, size, material_name, pixel_filter, bounces):
+def compare(
+    ctx,
+    scene,
+    size,
+    material_name,
+    pixel_filter,
+    bounces,
+    batches=BATCHES,
+    samples=SAMPLES,
+    renders=FOOTPRINT_RENDERS,
+    tolerance=MODEL_TOLERANCE,
+):
     """Render both, print and assert their agreement (the module notes say why so).
 
     Parameters
@@ -269,16 +304,29 @@ def compare(ctx, scene, size, material_name, pixel_filter, bounces):
         Footprint on or off, in both renderers.
     bounces : int
         Our ``u_trace_bounces`` (Mitsuba gets :func:`max_depth` of it).
+    batches, samples
+        Our independent batches and samples per batch.
+    renders
+        Mitsuba's footprint renders (:func:`mitsuba`).
+    tolerance
+        What the two models may differ by, on the ratio of the sums.
+
+    Returns
+    -------
+    dict
+        The interior's :func:`agreement`.
     """
     material, bsdf, threshold = MATERIALS[material_name]
-    ours, ours_error, covered = reference(ctx, scene, size, material, pixel_filter)
+    ours, ours_error, covered = reference(
+        ctx, scene, size, material, pixel_filter, batches, samples
+    )
     depth = max_depth(bounces)
-    theirs, interior = mitsuba(scene, size, bsdf, depth, pixel_filter, covered, threshold)
+    theirs, interior = mitsuba(scene, size, bsdf, depth, pixel_filter, covered, threshold, renders)
     label = f"{scene.name} {material_name} pixel_filter={pixel_filter} bounces={bounces}"
     stats = agreement(ours, ours_error, theirs.mean, theirs.standard_error, interior)
     print(f"{label}: {stats}")
     assert stats["pixels"] >= 150, f"{label}: only {stats['pixels']} pixels to compare"
-    bound = MODEL_TOLERANCE + 4 * stats["sigma"]
+    bound = tolerance + 4 * stats["sigma"]
     assert np.all(np.abs(stats["ratio"] - 1) < bound), f"{label}: {stats}"
     assert stats["inside"] >= Z_INSIDE, f"{label}: {stats}"
     if pixel_filter and material_name == "ggx":
@@ -288,6 +336,7 @@ def compare(ctx, scene, size, material_name, pixel_filter, bounces):
         assert edge["pixels"] >= 20
         bound = SILHOUETTE_TOLERANCE + 4 * edge["sigma"]
         assert np.all(np.abs(edge["ratio"] - 1) < bound), f"{label}, silhouette: {edge}"
+    return stats
 
 
 def test_the_rotated_mitsuba_envmap_reads_our_lat_long_texels():
@@ -385,3 +434,80 @@ def test_bunny_self_reflection_agrees_with_mitsuba(gl_ctx, material, pixel_filte
     """
     scene, size = bunny_scene()
     compare(gl_ctx, scene, size, material, pixel_filter, tracing.TRACE_BOUNCES)
+
+
+#: The knot's sample counts: ours 512 per pixel in 32 independent batches, Mitsuba's footprint
+#: 16 renders × FOOTPRINT_SPP; the ratio's standard error is then about 0.15 %.
+KNOT_BATCHES, KNOT_SAMPLES, KNOT_RENDERS = 32, 16, 16
+#: Least noise the knot's ratios must reach, so that the 0.5 % bound means something.
+KNOT_SIGMA = 0.002
+#: What our diffuse material differs from Mitsuba's by on the knot's interreflections: with
+#: f_λ = 0 eq. 8's Schlick F is (1 − n·v)⁵, not 0, so the grazing bounces between the
+#: strands continue in the Phong lobe about the mirror direction rather than in the cosine
+#: lobe. A scratch build with F = f_λ exactly gave 1.0014 ± 0.0012 of Mitsuba here; ours
+#: with Schlick, 0.9933 ± 0.0012.
+KNOT_SCHLICK_TOLERANCE = 0.012
+
+
+@pytest.mark.parametrize("material", ["diffuse", "ggx"])
+def test_knot_self_occlusion_agrees_with_mitsuba_direct_lighting(gl_ctx, monkeypatch, material):
+    """The knot lit directly (one traced segment, Mitsuba ``max_depth`` 2): visibility alone.
+
+    Issue 27 part 5 found the reference 2 % brighter than Mitsuba on a
+    self-occluding knot and asked whether light arrives that should be
+    blocked (ray origins at concave geometry, BVH misses, occluded
+    environment samples). Here every direction blocked by a strand is black
+    in both: the interior's mean is held to 0.5 % (measured at 48², 2048 spp:
+    0.998 ± 0.001 diffuse, 1.002 ± 0.001 GGX).
+    """
+    monkeypatch.setattr(tracing, "TRACE_BOUNCES", 1)
+    scene, size = knot_scene()
+    stats = compare(
+        gl_ctx, scene, size, material, True, 1, KNOT_BATCHES, KNOT_SAMPLES, KNOT_RENDERS
+    )
+    assert np.all(stats["sigma"] < KNOT_SIGMA), stats
+
+
+def test_traced_knot_ggx_agrees_with_mitsuba(gl_ctx):
+    """The knot's GGX interreflections at our full bounce count, held to 0.5 %.
+
+    GGX with F = 1 is the same model in both (up to the Smith term, which
+    differs at grazing only, outside the interior compared): measured 0.999 ± 0.001.
+    """
+    scene, size = knot_scene()
+    stats = compare(
+        gl_ctx,
+        scene,
+        size,
+        "ggx",
+        True,
+        tracing.TRACE_BOUNCES,
+        KNOT_BATCHES,
+        KNOT_SAMPLES,
+        KNOT_RENDERS,
+    )
+    assert np.all(stats["sigma"] < KNOT_SIGMA), stats
+
+
+def test_traced_knot_diffuse_agrees_with_mitsuba(gl_ctx):
+    """The knot's diffuse interreflections at our full bounce count.
+
+    Held to :data:`KNOT_SCHLICK_TOLERANCE`, not 0.5 %: the difference left is
+    the model's (eq. 8's Schlick term at grazing bounces), and it makes ours
+    darker, never brighter.
+    """
+    scene, size = knot_scene()
+    stats = compare(
+        gl_ctx,
+        scene,
+        size,
+        "diffuse",
+        True,
+        tracing.TRACE_BOUNCES,
+        KNOT_BATCHES,
+        KNOT_SAMPLES,
+        KNOT_RENDERS,
+        KNOT_SCHLICK_TOLERANCE,
+    )
+    assert np.all(stats["sigma"] < KNOT_SIGMA), stats
+    assert np.all(stats["ratio"] < 1.0 + 4 * stats["sigma"]), stats
