@@ -6,8 +6,9 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-# binutils: objdump and objcopy, which PyInstaller needs for the bundle (tests/test_packaging_bundle.py)
-DEBIAN_PACKAGES=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth binutils)
+# binutils: objdump and objcopy, which PyInstaller needs for the bundle (tests/test_packaging_bundle.py);
+# chromium: the headless browser that checks the atlas page (tests/test_atlas_gl.py)
+DEBIAN_PACKAGES=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri xvfb xauth binutils chromium)
 
 install_debian_packages() {
     command -v dpkg-query >/dev/null || return 0

@@ -8,6 +8,7 @@ their kinds, names and tables from the plugins (:mod:`envstudio.engine.registry`
 from __future__ import annotations
 
 from envstudio.commands import (
+    atlas,
     bake,
     bench,
     compare,
@@ -36,6 +37,7 @@ def builtin_commands() -> list[Command]:
         bench.COMMAND,
         prefilter.COMMAND,
         compare.COMMAND,
+        atlas.COMMAND,
         fit_glossiness.COMMAND,
         sh.COMMAND,
         diffuse.COMMAND,

@@ -1,0 +1,96 @@
+"""Run the atlas's scenes: here, in worker processes, or on a Dask cluster.
+
+Each worker renders in its own headless EGL context (a process each, started
+with ``spawn``: no fork after a context or Embree exists). References are
+cached by content in ``$ENVSTUDIO_CACHE_DIR`` (measure.ground_truth_cache),
+where every worker of one machine reaches them; on a cluster of several
+machines, point ``ENVSTUDIO_CACHE_DIR`` at a shared folder.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from envstudio.errors import UserError
+from envstudio.measure.atlas.cells import failed_rows, measure_scene_cell
+from envstudio.measure.atlas.grid import SceneCell
+
+__all__ = ["Task", "measure_task", "run_tasks"]
+
+#: (scene, methods, grid settings, image folder).
+Task = tuple[SceneCell, list[str], dict, Path]
+
+
+def measure_task(task: Task) -> list[dict]:
+    """Measure one scene's methods; a method that fails is measured alone and marked.
+
+    Never raises for bad input: the rows say why (one line) instead.
+    """
+    cell, methods, settings, folder = task
+    try:
+        return measure_scene_cell(cell, methods, settings, folder)
+    except UserError as error:
+        if len(methods) == 1:
+            return failed_rows(cell, methods, str(error))
+    rows = []
+    for method in methods:  # which one failed: each alone (the references are cached)
+        try:
+            rows += measure_scene_cell(cell, [method], settings, folder)
+        except UserError as error:
+            rows += failed_rows(cell, [method], str(error))
+    return rows
+
+
+def run_tasks(
+    tasks: list[Task], jobs: int = 1, scheduler: str | None = None
+) -> Iterator[tuple[Task, list[dict]]]:
+    """Yield (task, rows) as scenes finish: in order here, as they come elsewhere.
+
+    Parameters
+    ----------
+    tasks
+        The scenes to measure.
+    jobs
+        Worker processes (1: in this process).
+    scheduler
+        ``local`` for a Dask LocalCluster of ``jobs`` workers, or a scheduler address.
+    """
+    if scheduler is not None:
+        yield from _run_dask(tasks, jobs, scheduler)
+    elif jobs <= 1:
+        for task in tasks:
+            yield task, measure_task(task)
+    else:
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(jobs, mp_context=context) as pool:
+            futures = {pool.submit(measure_task, task): task for task in tasks}
+            try:
+                for future in as_completed(futures):
+                    yield futures[future], future.result()
+            except BaseException:
+                for future in futures:
+                    future.cancel()
+                raise
+
+
+def _run_dask(tasks: list[Task], jobs: int, scheduler: str):
+    from envstudio.io.cluster import dask_client
+
+    client, cluster = dask_client(scheduler, workers=max(jobs, 1))
+    try:
+        from dask.distributed import as_completed as dask_completed
+
+        futures = {client.submit(measure_task, task, pure=False): task for task in tasks}
+        try:
+            for future in dask_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
