@@ -133,6 +133,14 @@ class Method(ABC):
         """One line of progress for the UI and the CLI (empty for one-shot methods)."""
         return ""
 
+    def missing_input(self) -> str | None:
+        """Why the last frame is not the method's technique (a bake it needs), else None.
+
+        A method that draws a stand-in where its input is missing says so here;
+        ``envstudio atlas`` lists such cells with this reason instead of numbers.
+        """
+        return None
+
     def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
         """Labelled 8-bit images for the panel's :attr:`panel_figure` section (row 0 on top).
 

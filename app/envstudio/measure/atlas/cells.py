@@ -91,7 +91,9 @@ def measure_scene_cell(
         scene, scene only: median relative; PSNR and FLIP against both
         references), ms per frame and its ratio to the baseline, GPU bytes, the
         reference it was measured against, and its image files relative to the
-        atlas folder. A method that fails gets a row with its one-line reason.
+        atlas folder. A method that fails gets a row with its one-line reason
+        (``error``); one whose input is missing (Method.missing_input: pem without a
+        bake for the scene) a row with ``skipped`` and no numbers.
     """
     names = list(dict.fromkeys([*methods, TIMING_BASELINE]))
     classes = method_classes(names)
@@ -111,6 +113,7 @@ def measure_scene_cell(
             ssaa=settings["ssaa"],
         )
         memory = {name: gpu_bytes(session.method(name)) for name in names}
+        missing = {name: session.method(name).missing_input() for name in names}
     finally:
         session.release()
     folder.mkdir(parents=True, exist_ok=True)
@@ -119,6 +122,9 @@ def measure_scene_cell(
     baseline_ms = results[TIMING_BASELINE].frame_ms["median_ms"]
     rows = []
     for name in methods:
+        if missing[name]:
+            rows.append({**cell.__dict__, "method": name, "error": None, "skipped": missing[name]})
+            continue
         r = results[name]
         approximation = r.approximation
         rows.append(

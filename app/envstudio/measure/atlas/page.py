@@ -49,6 +49,7 @@ CSV_COLUMNS = (
     "cost_ratio",
     "gpu_bytes",
     "error",
+    "skipped",
 )
 #: Relative error at the top of the matrix's colour scale.
 ERROR_SCALE = 0.3
@@ -56,7 +57,7 @@ ERROR_SCALE = 0.3
 
 def error_of(row: dict) -> float | None:
     """A cell's error: against the untraced reference where there is one, else the traced."""
-    if row.get("error"):
+    if row.get("error") or row.get("skipped"):
         return None
     value = row.get("approximation_error")
     return row.get("scene_error") if value is None else value
@@ -108,7 +109,8 @@ def summary(rows: list[dict]) -> list[dict]:
             {
                 "method": method,
                 "cells": len(cells),
-                "failed": len(cells) - len(good),
+                "failed": sum(1 for r in cells if r.get("error")),
+                "skipped": sum(1 for r in cells if r.get("skipped")),
                 "median_approximation_error": _median(approx),
                 "worst_approximation_error": max(approx, default=None),
                 "median_scene_error": _median(scene),
@@ -143,23 +145,23 @@ def _montage(grid: AtlasGrid, rows: list[dict], folder: Path):
     chosen = {
         (r["method"], r["env"]): r
         for r in rows
-        if not r.get("error")
+        if error_of(r) is not None
         and r["exponent"] == exponent
         and r["mesh"] == grid.meshes[0]
         and r["kd"] == grid.kds[0]
         and r["camera"] == 0
     }
+    w, h = grid.size
+    blank = np.full((h, w, 3), 64, np.uint8)  # a cell without an image (failed, no bake)
     panels = []
     for method in grid.methods:
         line = []
         for env in grid.envs:
             row = chosen.get((method, env))
             path = folder / "cells" / row["image"] if row else None
-            if path is None or not path.exists():
-                return None
-            line.append(_to_uint8(read_image(path)))
+            line.append(_to_uint8(read_image(path)) if path and path.exists() else blank)
         panels.append(line)
-    return tile(panels) if panels else None
+    return tile(panels) if chosen else None
 
 
 def _to_uint8(image) -> np.ndarray:
@@ -233,6 +235,10 @@ def _matrix_cell(rows: list[dict]) -> str:
     failed = [r for r in rows if r.get("error")]
     if failed:
         return f'<td class="none" title="{html.escape(failed[0]["error"])}">failed</td>'
+    skipped = [r for r in rows if r.get("skipped")]
+    if skipped:
+        reason = html.escape(skipped[0]["skipped"])
+        return f'<td class="none" title="{reason}">{reason.split(":")[0]}</td>'
     errors = [error_of(r) for r in rows]
     value = _median([e for e in errors if e is not None])
     first = min(rows, key=lambda r: r["camera"])
@@ -306,6 +312,7 @@ def _summary_table(rows: list[dict]) -> str:
         cost = "–" if s["median_cost_ratio"] is None else f"{s['median_cost_ratio']:.2f}"
         lines.append(
             f"<tr><th>{html.escape(s['method'])}</th><td>{s['cells']}</td><td>{s['failed']}</td>"
+            f"<td>{s['skipped']}</td>"
             f"<td>{_percent(s['median_approximation_error'])}</td>"
             f"<td>{_percent(s['worst_approximation_error'])}</td>"
             f"<td>{_percent(s['median_scene_error'])}</td>"
@@ -318,6 +325,7 @@ def _summary_table(rows: list[dict]) -> str:
             "method",
             "cells",
             "failed",
+            "input missing",
             "approximation error, median",
             "worst",
             "scene error, median",

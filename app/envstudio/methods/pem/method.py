@@ -7,8 +7,10 @@ per-fragment texgen against the box and the part's ellipsoid, the layered
 composite with Schlick Fresnel and the SH diffuse layer, blended over the
 nearest views of the parameter space (methods/pem/blending.py). The EM model
 switch also offers the sphere at infinity and the scene's static EM (seed 003
-Figures 1 and 6). Without a bake for the scene the method shows the static EM
-and says how to bake one.
+Figures 1 and 6) and the PTM of Figure 7 (issue 31: the bake's per-view surface
+textures, a per-texel polynomial in the view parameters, methods/pem/blending.py).
+Without a bake for the scene the method shows the static EM and says how to bake
+one.
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
-from envstudio.methods.pem.blending import ViewBlend, view_blend
-from envstudio.methods.pem.gpu import MODELS, TEXGENS, PemTextures, texgen_defines
+from envstudio.methods.pem.blending import ViewBlend, ptm_blend, view_blend
+from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter, ReportExtra
 from envstudio.resources import asset_root
@@ -76,7 +78,8 @@ class PemMethod(Method):
             "em_model",
             "choice",
             "layered",
-            help="EM model: layered box + ellipsoid, one sphere at infinity, or the static EM.",
+            help="EM model: layered box + ellipsoid, one sphere at infinity, the static EM, or "
+            "the PTM (surface textures, a polynomial in the view: seed 003 Figure 7).",
             choices=MODELS,
         ),
         Parameter(
@@ -169,6 +172,10 @@ class PemMethod(Method):
             raise
         self._shown_pem = str(self.values["pem"])
 
+    def missing_input(self) -> str | None:
+        """ "needs a bake" with how to make one, while no bake is loaded for the scene."""
+        return f"needs a bake: {self._missing}" if self._loaded is None and self._missing else None
+
     def show(self, bake: PemBake, scene: GpuScene, path: Path, key: tuple | None = None) -> None:
         """Verify ``bake`` against the scene, upload it and draw it from now on.
 
@@ -257,9 +264,9 @@ class PemMethod(Method):
         environment.cube.use(location=0)
         set_uniform(program, "u_static", 0)
         loaded, dummy = self._loaded, self._dummies()
-        for unit, model in enumerate(("distant", "local", "sphere"), start=1):
-            texture = dummy["atlas"] if loaded is None else loaded.textures.atlases[model]
-            texture.use(location=unit)
+        for unit, model in zip((1, 2, 3, 5), ATLASES, strict=True):
+            atlases = {} if loaded is None else loaded.textures.atlases
+            atlases.get(model, dummy["atlas"]).use(location=unit)
             set_uniform(program, f"u_{model}", unit)
         (dummy["hull"] if loaded is None else loaded.textures.hull).use(location=4)
         set_uniform(program, "u_hull", 4)
@@ -278,11 +285,15 @@ class PemMethod(Method):
             self.last_blend = None
             return MODELS.index("static")
         bake = loaded.bake
-        blend = view_blend(bake.view_space, frame.camera_position, bool(self.values["blend"]))
+        model = MODELS.index(self._model_drawn())
+        if MODELS[model] == "ptm":
+            blend = ptm_blend(bake.view_space, frame.camera_position)
+        else:
+            blend = view_blend(bake.view_space, frame.camera_position, bool(self.values["blend"]))
         self.last_blend = blend
-        views = list(blend.views) + [0] * (4 - len(blend.views))
-        weights = list(blend.weights) + [0.0] * (4 - len(blend.weights))
-        set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[4]
+        views = list(blend.views) + [0] * (16 - len(blend.views))
+        weights = list(blend.weights) + [0.0] * (16 - len(blend.weights))
+        set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[16]
         set_uniform(program, "u_view_weight", tuple(float(w) for w in weights))
         set_uniform(program, "u_views_blended", len(blend.views))
         set_uniform(program, "u_parts", len(bake.parts))
@@ -298,8 +309,14 @@ class PemMethod(Method):
         set_uniform(program, "u_lod_bias", bias)
         set_uniform(program, "u_box_lo", bake.box[0])
         set_uniform(program, "u_box_hi", bake.box[1])
-        model = MODELS.index(str(self.values["em_model"]))
         set_uniform(program, "u_em_model", model)
+        return model
+
+    def _model_drawn(self) -> str:
+        """``em_model``, or ``layered`` where it is ``ptm`` and the bake has no PTM maps."""
+        model = str(self.values["em_model"])
+        if model == "ptm" and (self._loaded is None or "ptm" not in self._loaded.bake.maps):
+            return "layered"
         return model
 
     def set_part_uniforms(self, program: moderngl.Program, part: int) -> None:
@@ -345,6 +362,11 @@ class PemMethod(Method):
                 "reflections are those of the baked placement; reset the rotation"
             )
         bake, blend = self._loaded.bake, self.last_blend
+        if self.values["em_model"] == "ptm" and "ptm" not in bake.maps:
+            return (
+                f"{self._loaded.path.name} has no PTM maps (baked before issue 31): showing the "
+                "layered PEM; bake again with `envstudio bake pem` for the PTM"
+            )
         pairs = zip(blend.views, blend.weights, strict=True)
         views = " + ".join(f"{v} ({w:.2f})" for v, w in pairs)
         mb = self._loaded.textures.megabytes
@@ -424,7 +446,7 @@ class PemMethod(Method):
                 r.view.label,
                 f"{r.view.azimuth:.2f}",
                 f"{r.view.elevation:.2f}",
-                *(f"{r.metrics[m]['psnr']:.2f} / {r.metrics[m]['flip']:.4f}" for m in MODELS),
+                *(f"{r.metrics[m]['psnr']:.2f} / {r.metrics[m]['flip']:.4f}" for m in r.metrics),
                 r.best,
             ]
             for r in results
@@ -444,7 +466,7 @@ class PemMethod(Method):
                     f"against a ray trace at each view. {verdict} Wobble (mean absolute "
                     f"frame-to-frame change, 0-1, along a 0.25° sweep): {wobble_text}."
                 ),
-                columns=["view", "azimuth °", "elevation °", *MODELS, "best"],
+                columns=["view", "azimuth °", "elevation °", *results[0].metrics, "best"],
                 rows=rows,
                 data={
                     "views": [
