@@ -180,7 +180,7 @@ def test_local_rgba_inference_keeps_its_range(room):
         view, lookups, models, n, hull, static_em(room[1], room[0].reflector_centre(), n)
     )
     scores = playback_psnr(view, lookups, predicted)
-    assert set(scores) == {"layered", "sphere", "static"}
+    assert set(scores) == {"layered", "sphere", "static", "ptm"}
     assert scores["layered"] > scores["static"] + 3 and scores["sphere"] > scores["static"] + 3
     assert fit_pixels(view, lookups, 0).sum() > 50
 

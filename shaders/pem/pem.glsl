@@ -12,10 +12,15 @@
 // the views with weights u_view_weight. Convex-hull triangles (gl_PrimitiveID
 // flags) use the distant map only. Models: 0 layered box + ellipsoid, 1 a single
 // sphere at infinity per view (lookup = r), 2 the static EM (u_static, seed 003
-// Figure 1c), chosen by u_em_model.
+// Figure 1c), 3 the PTM (seed 003 section 6, Figure 7; issue 31): a surface
+// texture looked up by the surface point minus the EM origin (nothing reflected),
+// its per-view maps summed with the weights of a per-texel polynomial in the
+// view parameters (methods/pem/blending.py ptm_blend: up to 16 views, weights
+// of either sign), chosen by u_em_model.
 //
 // PEM_LOOKUP: instead of shading, write what the bake builds its rendering
-// matrix from: per model (face, s, t, lod) and (part, hull, triangle, 1).
+// matrix from: per model (face, s, t, lod) and (part, hull, triangle, 1); the
+// PTM's lookup in a fifth target.
 //
 // PEM_TEXGEN_VERTEX: the paper's texgen, per vertex (the reflected ray off each
 // vertex with its normal, intersected in the vertex stage), the lookup vectors
@@ -77,15 +82,17 @@ layout(location = 0) out vec4 f_distant;
 layout(location = 1) out vec4 f_local;
 layout(location = 2) out vec4 f_sphere;
 layout(location = 3) out vec4 f_part;
+layout(location = 4) out vec4 f_ptm;
 #else
 uniform sampler2D u_distant;
 uniform sampler2D u_local;
 uniform sampler2D u_sphere;
+uniform sampler2D u_ptm;
 uniform samplerCube u_static;
 uniform int u_em_model;
-uniform int u_view_map[4];     // view index of each blended sample
-uniform float u_view_weight[4];
-uniform int u_views_blended;   // 1 (unblended), 2 (arc) or 4 (grid)
+uniform int u_view_map[16];    // view index of each blended sample
+uniform float u_view_weight[16];
+uniform int u_views_blended;   // 1 (unblended), 2 (arc), 4 (grid), up to 16 (PTM)
 uniform bool u_use_distant;
 uniform bool u_use_local;
 uniform bool u_use_fresnel;
@@ -116,20 +123,26 @@ void main() {
         p, r, pem_ellipsoid_exit(p, r, u_ellipsoid_centre, u_ellipsoid_radii), u_em_origin);
     vec3 r_lookup = r;
 #endif
+    // the PTM's surface texture: the point itself (linear, so the same per vertex)
+    vec3 q_ptm = v_world_position - u_em_origin;
     // derivatives in uniform control flow, before any branch
     float lod_distant = pem_lod(q_distant);
     float lod_local = pem_lod(q_local);
     float lod_sphere = pem_lod(r_lookup);
+    float lod_ptm = pem_lod(q_ptm);
     bool hull = u_use_hull && pem_on_hull();
     int face_distant, face_local, face_sphere;
     vec2 st_distant = cube_face_uv(q_distant, face_distant);
     vec2 st_local = cube_face_uv(q_local, face_local);
     vec2 st_sphere = cube_face_uv(r_lookup, face_sphere);
+    int face_ptm;
+    vec2 st_ptm = cube_face_uv(q_ptm, face_ptm);
 #if defined PEM_LOOKUP
     f_distant = vec4(float(face_distant), st_distant, lod_distant);
     f_local = vec4(float(face_local), st_local, lod_local);
     f_sphere = vec4(float(face_sphere), st_sphere, lod_sphere);
     f_part = vec4(float(u_part), hull ? 1.0 : 0.0, float(gl_PrimitiveID), 1.0);
+    f_ptm = vec4(float(face_ptm), st_ptm, lod_ptm);
 #else
     vec3 incident = vec3(0.0);
     if (u_em_model == 2) {
@@ -141,6 +154,8 @@ void main() {
             if (u_em_model == 1) {
                 sample_k = pem_trilinear(
                     u_sphere, map, face_sphere, st_sphere, lod_sphere + u_lod_bias).rgb;
+            } else if (u_em_model == 3) {
+                sample_k = pem_trilinear(u_ptm, map, face_ptm, st_ptm, lod_ptm + u_lod_bias).rgb;
             } else {
                 vec3 distant = u_use_distant
                     ? pem_trilinear(

@@ -10,6 +10,11 @@ Example::
     elevation = 10.0
     distance = 3.0
     fov = 45.0
+    [proxy]                          # optional: the volume parallax-corrected cube maps
+    shape = "box"                    # intersect (methods/parallax); or "sphere" with
+    min = [-4.0, -0.5, -4.0]         # centre = [x, y, z] and radius = R
+    max = [4.0, 7.5, 4.0]
+    probe = [0.0, 0.4, 0.0]          # optional capture point (default: the reflectors' centre)
     [[object]]
     name = "bunny"
     mesh = "mesh/bunny.ply"          # or primitive = "sphere" | "box" | "room"
@@ -58,6 +63,7 @@ from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.material import Material
 from envstudio.scene.mesh import MeshData, loop_subdivided
 from envstudio.scene.primitives import box, uv_sphere
+from envstudio.scene.proxy import BoxProxy, Proxy, SphereProxy
 from envstudio.scene.tangents import AXES, FIELDS, TangentField
 
 #: The reference's BRDF models a material may name (methods/reference/method.py MODELS).
@@ -128,6 +134,21 @@ class ObjectSpec(msgspec.Struct, forbid_unknown_fields=True):
     material: MaterialSpec = msgspec.field(default_factory=MaterialSpec)
 
 
+class ProxySpec(msgspec.Struct, forbid_unknown_fields=True):
+    """``[proxy]``: a box (``min``, ``max``) or a sphere (``centre``, ``radius``), world space.
+
+    ``probe`` is the point the cube map is captured from (default: the reflectors'
+    centre); it must lie inside the proxy (:func:`_proxy`).
+    """
+
+    shape: Literal["box", "sphere"]
+    min: Vector | None = None
+    max: Vector | None = None
+    centre: Vector | None = None
+    radius: Positive | None = None
+    probe: Vector | None = None
+
+
 class SceneSpec(msgspec.Struct, forbid_unknown_fields=True):
     """A scene file's top level."""
 
@@ -135,6 +156,7 @@ class SceneSpec(msgspec.Struct, forbid_unknown_fields=True):
     object: Annotated[list[ObjectSpec], msgspec.Meta(min_length=1)]
     name: str | None = None
     camera: CameraSpec = msgspec.field(default_factory=CameraSpec)
+    proxy: ProxySpec | None = None
 
 
 def shipped_scenes() -> dict[str, Path]:
@@ -191,7 +213,45 @@ def load_scene(name_or_path: str | os.PathLike, max_env_width: int | None = None
         target=cam.target,
         fov_y=cam.fov,
     )
-    return Scene(environment, nodes, camera, spec.name or path.stem)
+    scene = Scene(environment, nodes, camera, spec.name or path.stem)
+    if spec.proxy is not None:
+        scene.proxy = _proxy(path, spec.proxy, scene)
+    return scene
+
+
+def _proxy(path: Path, spec: ProxySpec, scene: Scene) -> Proxy:
+    """The scene's proxy volume, with the keys its shape needs and the probe inside it."""
+    keys = {"box": ("min", "max"), "sphere": ("centre", "radius")}
+    needed = keys[spec.shape]
+    for key in needed:
+        if getattr(spec, key) is None:
+            raise InputFileError(
+                f"{path}: proxy.{key} is missing (a {spec.shape} needs {needed[0]} and {needed[1]})"
+            )
+    for shape, others in keys.items():
+        extra = [key for key in others if shape != spec.shape and getattr(spec, key) is not None]
+        if extra:
+            raise InputFileError(
+                f"{path}: proxy.{extra[0]} belongs to shape = {shape!r}, not {spec.shape!r}"
+            )
+    if spec.shape == "box":
+        if not all(lo < hi for lo, hi in zip(spec.min, spec.max, strict=True)):
+            raise InputFileError(
+                f"{path}: proxy.min = {list(spec.min)}, expected below proxy.max = "
+                f"{list(spec.max)} on every axis"
+            )
+        proxy = BoxProxy(spec.min, spec.max, spec.probe)
+    else:
+        proxy = SphereProxy(spec.centre, spec.radius, spec.probe)
+    probe = scene.reflector_centre() if spec.probe is None else spec.probe
+    if not proxy.contains(probe):
+        which = "proxy.probe" if spec.probe is not None else "the reflectors' centre (the probe)"
+        raise InputFileError(
+            f"{path}: the proxy {proxy.describe()} does not contain {which} "
+            f"[{', '.join(f'{float(v):g}' for v in probe)}]; expected the probe inside it "
+            "(declare proxy.probe = [x, y, z] inside, or enlarge the proxy)"
+        )
+    return proxy
 
 
 def read_scene_spec(path: Path) -> SceneSpec:

@@ -19,6 +19,7 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.material import Material
 from envstudio.scene.mesh import MeshData
+from envstudio.scene.proxy import Proxy
 
 Role = Literal["reflector", "local"]
 
@@ -58,6 +59,9 @@ class Scene:
     name: str = "scene"
     #: What replaced the scene file's own environment or reflector ("" when nothing did).
     variant: str = ""
+    #: The proxy volume of a parallax-corrected cube map (scene/proxy.py), None when the
+    #: scene declares none.
+    proxy: Proxy | None = None
 
     @property
     def label(self) -> str:

@@ -6,6 +6,18 @@ arc (four of a grid) are blended with linear (bilinear) weights, so the image
 changes continuously as the camera moves; beyond the ends of an arc that does
 not close, the end sample takes the whole weight (still continuous). Unblended
 playback (seed 003 §6's table) takes the nearest sample alone.
+
+The PTM (seed 003 §6, Figure 7; issue 31) is a per-texel polynomial in the view
+parameters, fitted by least squares to the maps of the views around the camera
+(:func:`ptm_blend`): on an arc a quadratic in the azimuth through the four
+views about the camera's cell (two bracketing, one beyond each), on a grid
+Malzbender et al.'s biquadratic 1, a, e, a², ae, e² through the 4 × 4 views
+about its cell (fewer at the ends, the degree cut to what they determine). The
+fitted value at the camera is linear in the maps, Σ_j w_j x_j with w the first row
+of the fit's pseudo-inverse, so the playback evaluates the polynomial of every
+texel by summing the views' lookups with the weights w (of either sign): no
+coefficient maps are stored. The window changes at the sampled views, where the
+PTM jumps from one fit to the next.
 """
 
 from __future__ import annotations
@@ -15,7 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["ViewBlend", "axis_weights", "camera_angles", "view_blend"]
+__all__ = ["PTM_DEGREE", "ViewBlend", "axis_weights", "camera_angles", "ptm_blend", "view_blend"]
+
+#: Total degree of the PTM's polynomial in the view parameters (Malzbender's biquadratic).
+PTM_DEGREE = 2
 
 
 @dataclass(frozen=True)
@@ -25,9 +40,11 @@ class ViewBlend:
     Attributes
     ----------
     views : tuple of int
-        View indices into the bake's views (elevation-major), 1, 2 or 4 of them.
+        View indices into the bake's views (elevation-major), 1, 2 or 4 of them
+        (up to 16 for :func:`ptm_blend`).
     weights : tuple of float
-        Their weights, each in [0, 1], summing to 1.
+        Their weights, each in [0, 1], summing to 1 (the PTM's: any sign, summing
+        to 1).
     position : tuple of float
         The camera's place along the axes in view-index units (azimuth, elevation).
     """
@@ -129,3 +146,48 @@ def view_blend(view_space: dict, position: npt.ArrayLike, blend: bool = True) ->
     return ViewBlend(
         tuple(int(v) for v, _ in corners), tuple(float(w) for _, w in corners), (ua, ue)
     )
+
+
+def _window(count: int, i0: int, u: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the views about cell [i0, i0 + 1] of one axis and their offsets from u."""
+    idx = np.arange(max(0, i0 - 1), min(count - 1, i0 + 2) + 1)
+    return idx, idx - u
+
+
+def ptm_blend(view_space: dict, position: npt.ArrayLike, degree: int = PTM_DEGREE) -> ViewBlend:
+    """The PTM's views and weights at a camera (module docstring; seed 003 §6, Figure 7).
+
+    Parameters
+    ----------
+    view_space
+        ``ViewSpace.describe()`` of the bake.
+    position
+        (3,) camera eye, world space.
+    degree
+        Total degree of the polynomial (per axis at most the window's views − 1).
+
+    Returns
+    -------
+    ViewBlend
+        The window's views (at most 16) and weights w with Σ_j w_j x_j the
+        least-squares polynomial's value at the camera, for every texel's x.
+    """
+    azimuths = np.asarray(view_space["azimuths"], dtype=np.float64)
+    elevations = np.asarray(view_space["elevations"], dtype=np.float64)
+    azimuth, elevation = camera_angles(position, view_space["target"])
+    a0, _, _, ua = axis_weights(azimuths, azimuth, periodic=True)
+    ia, ta = _window(len(azimuths), a0, ua)
+    if view_space["kind"] == "grid" and len(elevations) > 1:
+        e0, _, _, ue = axis_weights(elevations, elevation)
+        ie, te = _window(len(elevations), e0, ue)
+    else:
+        ue, ie, te = 0.0, np.zeros(1, np.int64), np.zeros(1)
+    da, de = min(degree, len(ia) - 1), min(degree, len(ie) - 1)
+    terms = [(p, q) for p in range(da + 1) for q in range(de + 1) if p + q <= degree]
+    views, rows = [], []
+    for e, t_e in zip(ie, te, strict=True):
+        for a, t_a in zip(ia, ta, strict=True):
+            views.append(int(e) * len(azimuths) + int(a))
+            rows.append([t_a**p * t_e**q for p, q in terms])
+    weights = np.linalg.pinv(np.array(rows))[0]  # the constant term: the value at the camera
+    return ViewBlend(tuple(views), tuple(float(w) for w in weights), (ua, ue))

@@ -67,6 +67,25 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         "nearer the decimated finest, steadier at small playback sizes, docs/pem)",
     )
     parser.add_argument(
+        "--coupling",
+        type=float,
+        default=0.0,
+        help="coupled inference (not in seed 003): weight γ tying each view's maps to its "
+        "neighbours' (0: each view alone, as the paper; docs/pem)",
+    )
+    parser.add_argument(
+        "--coupling-passes",
+        type=int,
+        default=2,
+        help="coupled passes after the independent one (2)",
+    )
+    parser.add_argument(
+        "--no-ptm",
+        dest="ptm",
+        action="store_false",
+        help="skip the PTM's per-view surface textures (seed 003 Figure 7)",
+    )
+    parser.add_argument(
         "--lookups",
         choices=("auto", "gl", "cpu"),
         default="auto",
@@ -97,6 +116,11 @@ def _check(args: argparse.Namespace) -> None:
     tie = getattr(args, "tie", None)
     if tie is not None and not (math.isfinite(tie) and 0.0 <= tie <= 10.0):
         raise ParameterError(f"--tie {tie:g}: expected a weight in [0, 10]")
+    coupling = getattr(args, "coupling", 0.0)
+    if not (math.isfinite(coupling) and 0.0 <= coupling <= 100.0):
+        raise ParameterError(f"--coupling {coupling:g}: expected a weight in [0, 100]")
+    if getattr(args, "coupling_passes", 2) < 1:
+        raise ParameterError(f"--coupling-passes {args.coupling_passes}: expected at least 1")
     if getattr(args, "elevations", 1) < 1:
         raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
@@ -156,6 +180,9 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 scheduler=getattr(args, "scheduler", None),
                 lookups=getattr(args, "lookups", "auto"),
                 tie=getattr(args, "tie", None),
+                ptm=getattr(args, "ptm", True),
+                coupling=getattr(args, "coupling", 0.0),
+                coupling_passes=getattr(args, "coupling_passes", 2),
             )
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
             raise ParameterError(str(exc)) from None
@@ -166,7 +193,11 @@ def run_bake_pem(args: argparse.Namespace) -> int:
             raise OutputFileError(f"{exc}; {_saved(out, args)} once there is room") from None
     bake = report.bake
     resumed = f", {len(report.reused)} resumed" if report.reused else ""
-    scores = ", ".join(f"{name} {np.nanmean(bake.playback_psnr[name]):.1f}" for name in PLAYBACK)
+    scores = ", ".join(
+        f"{name} {np.nanmean(bake.playback_psnr[name]):.1f}"
+        for name in PLAYBACK
+        if name in bake.playback_psnr
+    )
     print(
         f"{out}: {bake.views} views × {len(bake.parts)} parts, {bake.em_size}² EMs in "
         f"{bake.levels} levels ({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s; "

@@ -42,7 +42,8 @@ def draw_offmanifold(request: FigureRequest) -> list[str]:
     offmanifold.figure_image(results, request.output)
     lines = [
         f"{request.output}: rows: views off the baked arc; columns: ray trace, layered PEM, ",
-        "sphere at infinity, static EM (displayed PSNR dB / FLIP, * best)",
+        "sphere at infinity, static EM, and the PTM where the bake has one "
+        "(displayed PSNR dB / FLIP, * best)",
     ]
     for r in results:
         cells = "  ".join(f"{m} {v['psnr']:.2f} dB / {v['flip']:.4f}" for m, v in r.metrics.items())
@@ -59,7 +60,8 @@ MAPS = Figure(
 )
 OFFMANIFOLD = Figure(
     "pem-offmanifold",
-    "seed 003 Figures 6-7, layered PEM, sphere at infinity and static EM against a ray trace "
+    "seed 003 Figures 6-7, layered PEM, sphere at infinity, static EM (and the PTM of a bake "
+    "that has one) against a ray trace "
     "midway between baked views and 10 and 20 degrees above the arc",
     draw_offmanifold,
 )

@@ -11,10 +11,14 @@ from envstudio.errors import InputFileError
 from envstudio.methods.pem.atlas import ATLAS_WIDTH, pack_atlas, pack_flags
 from envstudio.methods.pem.bake.pem_file import PemBake
 
-__all__ = ["MODELS", "TEXGENS", "PemTextures", "texgen_defines"]
+__all__ = ["ATLASES", "MODELS", "TEXGENS", "PemTextures", "texgen_defines"]
 
-#: EM models of the panel's switch, in the shader's ``u_em_model`` order.
-MODELS = ("layered", "sphere", "static")
+#: EM models of the panel's switch, in the shader's ``u_em_model`` order: seed 003's
+#: layered PEM, sphere at infinity (Figure 6), static EM (Figure 1c) and PTM (Figure 7,
+#: a bake's per-view surface textures as a polynomial in the view; issue 31).
+MODELS = ("layered", "sphere", "static", "ptm")
+#: The bake's maps each atlas holds (``ptm`` only for bakes that have it).
+ATLASES = ("distant", "local", "sphere", "ptm")
 #: Where the lookup vectors are computed: per fragment, or per vertex (seed 003 §4).
 TEXGENS = ("fragment", "vertex")
 
@@ -39,7 +43,8 @@ class PemTextures:
     Attributes
     ----------
     atlases : dict of str to moderngl.Texture
-        ``distant``, ``local``, ``sphere``: RGBA32F atlases (methods/pem/atlas.py).
+        ``distant``, ``local``, ``sphere`` and, where baked, ``ptm``: RGBA32F atlases
+        (methods/pem/atlas.py).
     hull : moderngl.Texture
         R8UI per-triangle convex-hull flags of every part.
     hull_offsets : list of int
@@ -54,7 +59,7 @@ class PemTextures:
         self.width = min(ATLAS_WIDTH, limit)
         self.atlases: dict[str, moderngl.Texture] = {}
         try:
-            for model in ("distant", "local", "sphere"):
+            for model in (m for m in ATLASES if m in bake.maps):
                 image = pack_atlas(bake.maps[model], self.width)
                 if image.shape[0] > limit:
                     raise InputFileError(

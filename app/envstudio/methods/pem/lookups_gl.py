@@ -4,8 +4,8 @@ Issue 18 asks that the rendering matrix A be built "from the exact texture
 coordinates and mip level the playback shader will use: render the lookup
 vector and the level per pixel on the GPU". :class:`GlLookups` draws the scene
 with shaders/pem/pem.glsl compiled with ``PEM_LOOKUP``: the same texgen, face
-selection and ``dFdx``/``dFdy`` level as the playback, written per pixel to four
-RGBA32F targets instead of shaded. The result is the
+selection and ``dFdx``/``dFdy`` level as the playback, written per pixel to five
+RGBA32F targets instead of shaded (distant, local, sphere, part, ptm). The result is the
 :class:`~envstudio.methods.pem.bake.lookups.PixelLookups` that
 :func:`~envstudio.methods.pem.bake.lookups.pixel_lookups` computes on the CPU, so the
 bake's A and the playback agree texel for texel on this GL.
@@ -69,7 +69,7 @@ class GlLookups:
     def _target(self, size: int) -> moderngl.Framebuffer:
         if self._fbo is None or self._fbo.size != (size, size):
             self._release_target()
-            colours = [self.ctx.texture((size, size), 4, dtype="f4") for _ in range(4)]
+            colours = [self.ctx.texture((size, size), 4, dtype="f4") for _ in range(5)]
             depth = self.ctx.depth_renderbuffer((size, size))
             self._fbo = self.ctx.framebuffer(colours, depth)
         return self._fbo
@@ -147,7 +147,7 @@ class GlLookups:
             part=part,
             triangle=np.where(on, np.rint(images[3][..., 2]), -1).astype(np.int32),
         )
-        for model, image in zip(MODELS, images[:3], strict=True):
+        for model, image in zip(MODELS, [*images[:3], images[4]], strict=True):
             lookups.face[model] = np.where(on, np.rint(image[..., 0]), -1).astype(np.int8)
             lookups.st[model] = np.where(on[..., None], image[..., 1:3], 0.0).astype(np.float32)
             lookups.lod[model] = np.where(on, image[..., 3], 0.0).astype(np.float32)

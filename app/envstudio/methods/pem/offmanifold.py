@@ -29,7 +29,14 @@ from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.gpu import MODELS
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["OffManifoldView", "ViewResult", "measure", "offmanifold_views", "wobble"]
+__all__ = [
+    "OffManifoldView",
+    "ViewResult",
+    "bake_models",
+    "measure",
+    "offmanifold_views",
+    "wobble",
+]
 
 #: Heights above the arc of seed 003 Figure 7's off-manifold views, degrees.
 ELEVATIONS_ABOVE = (10.0, 20.0)
@@ -99,6 +106,11 @@ def offmanifold_views(view_space: dict) -> list[OffManifoldView]:
     return views
 
 
+def bake_models(bake) -> tuple[str, ...]:
+    """The EM models a bake can show: :data:`MODELS`, without ``ptm`` for a bake without it."""
+    return tuple(m for m in MODELS if m != "ptm" or "ptm" in bake.maps)
+
+
 def _camera(view_space: dict, view: OffManifoldView) -> OrbitCamera:
     return OrbitCamera(
         azimuth=view.azimuth,
@@ -166,7 +178,7 @@ def measure(
         reference = traced.composite.astype(np.float64)
         result = ViewResult(view, pixels=int(mask.sum()))
         result.images["trace"] = to_ldr(reference, exposure, tonemap)
-        for model in MODELS:
+        for model in bake_models(bake):
             image = _render(session, method, camera, size, model)
             shown = to_ldr(image, exposure, tonemap)
             result.images[model] = shown
@@ -219,7 +231,8 @@ def wobble(
     exposure, tonemap = float(display["exposure"]), str(display["tonemap"])
     start = float(space["azimuths"][0])
     elevation = float(space["elevations"][0]) + elevation_above
-    images: dict[str, list[np.ndarray]] = {m: [] for m in (*MODELS, "trace")}
+    models = bake_models(bake)
+    images: dict[str, list[np.ndarray]] = {m: [] for m in (*models, "trace")}
     masks = []
     for k in range(frames):
         view = OffManifoldView(f"sweep {k}", start + k * step, elevation)
@@ -227,7 +240,7 @@ def wobble(
         traced = tracer.trace(camera, size, samples, seed=11)  # one jitter: no noise flicker
         masks.append((traced.coverage >= 1.0 - 1e-6).any(axis=0))
         images["trace"].append(to_ldr(traced.composite, exposure, tonemap) / 255.0)
-        for model in MODELS:
+        for model in models:
             shown = to_ldr(_render(session, method, camera, size, model), exposure, tonemap)
             images[model].append(shown / 255.0)
     out = {}
@@ -257,12 +270,13 @@ def figure_image(results: list[ViewResult], path) -> None:
 
     from envstudio.io.atomic import atomic_path
 
-    columns = ("trace", *MODELS)
+    columns = ("trace", *results[0].metrics)
     titles = {
         "trace": "ray trace",
         "layered": "layered PEM",
         "sphere": "sphere at infinity",
         "static": "static EM",
+        "ptm": "PTM",
     }
     fig, axes = plt.subplots(
         len(results), len(columns), figsize=(2.4 * len(columns), 2.5 * len(results)), dpi=100

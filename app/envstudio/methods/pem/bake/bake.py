@@ -14,6 +14,19 @@ environment pixels, parameters and camera). A rerun verifies and reuses the
 parts whose key matches and redoes the rest. ``OUT.pem`` (:mod:`.pem_file`) is
 written atomically only when every view is present and verified, then the parts
 folder is removed; an interrupted bake leaves nothing under ``OUT.pem``.
+
+Coupled inference (issue 31; not in seed 003): with a coupling weight γ > 0,
+after the independent pass every view is inferred again ``coupling_passes``
+times, drawn towards the mean of its neighbours' latest maps (red-black
+Gauss–Seidel passes of the joint least squares,
+:mod:`~envstudio.methods.pem.bake.infer`: first the views of even index sum
+(elevation row + azimuth column), whose neighbours are all odd, then the odd
+ones with the even ones' new maps; plain Jacobi passes, every view from the pass
+before, oscillate for large γ). The neighbours are the adjacent views of the arc,
+or the four of a grid. Each half pass is again one work unit per view, run in
+parallel, saved as ``view-NNNNN-pass-K.npz`` and resumable. γ = 0 runs the independent
+pass alone, with the parameters of a bake made before the option existed: the
+same file, bit for bit.
 """
 
 from __future__ import annotations
@@ -28,7 +41,7 @@ import time
 import zipfile
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +54,7 @@ from envstudio.methods.pem.bake.lookups import (
     LOD_BIAS,
     MODELS,
     PLAYBACK,
+    REQUIRED,
     PixelLookups,
     pixel_lookups,
 )
@@ -56,6 +70,7 @@ __all__ = [
     "BakeReport",
     "ViewTask",
     "bake_view",
+    "neighbours",
     "part_keys",
     "parts_folder",
     "run_bake",
@@ -65,10 +80,35 @@ __all__ = [
 DASK_CONNECT_TIMEOUT = 10.0
 
 
-def part_keys(em_size: int) -> list[str]:
+def part_keys(em_size: int, models: tuple[str, ...] = MODELS) -> list[str]:
     """Names of a view's arrays (:func:`bake_view`) saved in its part file."""
-    keys = [f"{m}_{k}" for m in MODELS for k in range(len(mip_sizes(em_size)))]
-    return keys + [f"psnr_{m}" for m in MODELS] + [f"playback_{n}" for n in PLAYBACK]
+    keys = [f"{m}_{k}" for m in models for k in range(len(mip_sizes(em_size)))]
+    names = [n for n in PLAYBACK if n != "ptm" or "ptm" in models]
+    return keys + [f"psnr_{m}" for m in models] + [f"playback_{n}" for n in names]
+
+
+def neighbours(view_space: dict) -> list[list[int]]:
+    """Each view's neighbours on its parameter grid (coupled inference, module docstring).
+
+    Parameters
+    ----------
+    view_space
+        ``ViewSpace.describe()``: views are elevation-major, ``len(azimuths)`` a row.
+
+    Returns
+    -------
+    list of list of int
+        Per view, the adjacent views along the azimuths (an arc does not close:
+        its ends have one) and, on a grid, along the elevations.
+    """
+    count = len(view_space["azimuths"])
+    rows = len(view_space["elevations"]) if view_space.get("kind") == "grid" else 1
+    out = []
+    for e in range(rows):
+        for a in range(count):
+            near = [(e, a - 1), (e, a + 1), (e - 1, a), (e + 1, a)]
+            out.append([r * count + c for r, c in near if 0 <= r < rows and 0 <= c < count])
+    return out
 
 
 @dataclass(frozen=True)
@@ -106,6 +146,17 @@ class ViewTask:
         The GL lookups' class (methods/pem/lookups_gl.py's ``GlLookups``), which a
         worker imports by name when it unpickles the task: the bake itself never
         imports GL.
+    models : tuple of str
+        The maps to infer (:data:`~envstudio.methods.pem.bake.lookups.MODELS`; without
+        ``ptm``: the three of seed 003 alone, as bakes before issue 31).
+    coupling : float
+        γ of coupled inference (module docstring; not in seed 003); 0: independent.
+    coupling_pass : int
+        0 the independent pass, K ≥ 1 the K-th coupled pass.
+    anchors : dict or None
+        For a coupled pass: model → per part None or (mean, count), the mean
+        (Σ 6 n_k², C) of the ``count`` neighbours' maps of the pass before (derived
+        from verified parts, so not part of the part's identity).
     """
 
     scene: str
@@ -124,6 +175,10 @@ class ViewTask:
     lod_bias: float = LOD_BIAS
     lookups: str = "gl"
     gl_lookups: type | None = None
+    models: tuple[str, ...] = MODELS
+    coupling: float = 0.0
+    coupling_pass: int = 0
+    anchors: dict | None = None
 
     def camera(self) -> OrbitCamera:
         """The view's camera."""
@@ -230,6 +285,9 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
     view = tracer.trace(camera, task.size, task.samples, task.seed + task.index)
     start = time.perf_counter()
     lookups = _view_lookups(ctx, task, camera)
+    coupled = {}
+    if task.coupling and task.anchors is not None:
+        coupled = {"anchors": task.anchors, "coupling": task.coupling}
     models = infer_view_models(
         view,
         lookups,
@@ -238,17 +296,19 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
         smoothness=task.smoothness,
         tie=task.tie,
         lod_bias=task.lod_bias,
+        models=tuple(task.models),
+        **coupled,
     )
     if n not in ctx["static"]:
         ctx["static"][n] = static_em(tracer, ctx["scene"].reflector_centre(), n)
     predicted = predict(view, lookups, models, n, ctx["hull"], ctx["static"][n])
     scores = playback_psnr(view, lookups, predicted)
     out: dict[str, np.ndarray] = {}
-    for model in MODELS:
+    for model in task.models:
         for k, level in enumerate(models.maps(model, n)):
             out[f"{model}_{k}"] = level
         out[f"psnr_{model}"] = models.psnr(model)
-    for name in PLAYBACK:
+    for name in scores:
         out[f"playback_{name}"] = np.array(scores[name], dtype=np.float64)
     out["trace_seconds"] = np.array(view.seconds)
     out["infer_seconds"] = np.array(time.perf_counter() - start)
@@ -297,19 +357,27 @@ def _bake_key(scene_path: Path, scene, parameters: dict) -> str:
 
 def _part_checksum(arrays: dict[str, np.ndarray], header: dict) -> str:
     digest = hashlib.sha256(json.dumps(header, sort_keys=True).encode())
-    for name in part_keys(header["task"]["em_size"]):
+    models = tuple(header["task"].get("models", REQUIRED))
+    for name in part_keys(header["task"]["em_size"], models):
         digest.update(np.ascontiguousarray(arrays[name]).tobytes())
     return digest.hexdigest()
 
 
 def _part_header(key: str, task: ViewTask) -> dict:
     """The part's identity: the bake's key and the task (its GL lookups' class is how, not what)."""
-    fields = {k: v for k, v in asdict(task).items() if k != "gl_lookups"}
-    return {"key": key, "task": fields}
+    skip = ("gl_lookups", "anchors")  # how, and what verified parts determine
+    names = [f.name for f in fields(task) if f.name not in skip]
+    task_fields = {k: getattr(task, k) for k in names}
+    task_fields["models"] = list(task.models)
+    if not task.coupling:  # the independent pass: the identity of parts before issue 31
+        del task_fields["coupling"], task_fields["coupling_pass"]
+    if tuple(task.models) == REQUIRED:
+        del task_fields["models"]
+    return {"key": key, "task": task_fields}
 
 
 def _save_part(path: Path, key: str, task: ViewTask, result: dict) -> None:
-    arrays = {k: np.array(result[k], order="C") for k in part_keys(task.em_size)}
+    arrays = {k: np.array(result[k], order="C") for k in part_keys(task.em_size, task.models)}
     header = _part_header(key, task)
     meta = {"header": header, "checksum": _part_checksum(arrays, header)}
     with atomic_path(path) as tmp:
@@ -322,7 +390,7 @@ def _load_part(path: Path, key: str, task: ViewTask) -> dict | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            arrays = {k: np.asarray(data[k]) for k in part_keys(task.em_size)}
+            arrays = {k: np.asarray(data[k]) for k in part_keys(task.em_size, task.models)}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         return None
     header = _part_header(key, task)
@@ -424,6 +492,9 @@ def run_bake(
     lod_bias: float = LOD_BIAS,
     lookups: str = "auto",
     gl_lookups: type | None = None,
+    ptm: bool = True,
+    coupling: float = 0.0,
+    coupling_passes: int = 2,
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -469,6 +540,13 @@ def run_bake(
         as ``parameters["lookups"]``.
     gl_lookups
         The GL lookups' class (:class:`ViewTask`); None bakes with ``cpu`` lookups.
+    ptm
+        Also infer the PTM's per-view surface textures (issue 31; seed 003 §6,
+        Figure 7). False: the three maps of seed 003 alone, as bakes before.
+    coupling, coupling_passes
+        γ of coupled inference and the coupled passes after the independent one
+        (module docstring; not in seed 003). γ = 0: no coupled pass, and the
+        parameters, parts and file of an uncoupled bake.
 
     Returns
     -------
@@ -482,6 +560,12 @@ def run_bake(
     space = views if isinstance(views, ViewSpace) else views(scene_obj.camera)
     tie = float(smoothness if tie is None else tie)
     lookups = resolve_lookups(lookups, gl_lookups)
+    coupling = float(coupling)
+    if not (np.isfinite(coupling) and coupling >= 0.0):
+        raise ValueError(f"coupling {coupling:g}: expected a weight ≥ 0")
+    if coupling and int(coupling_passes) < 1:
+        raise ValueError(f"coupling passes {coupling_passes}: expected at least 1")
+    models = MODELS if ptm else REQUIRED
     parameters = {
         "size": int(size),
         "samples": int(samples),
@@ -498,6 +582,9 @@ def run_bake(
         "hull": "convex hull of all reflector parts",
         "environment": scene_obj.environment.checksum(),
     }
+    if coupling:  # not in seed 003 (issue 31); absent: the independent bake of before
+        parameters["coupling"] = coupling
+        parameters["coupling_passes"] = int(coupling_passes)
     key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
     tasks = [
         ViewTask(
@@ -517,17 +604,92 @@ def run_bake(
             float(lod_bias),
             lookups,
             gl_lookups if lookups == "gl" else None,
+            models,
+            coupling,
         )
         for i, c in enumerate(space.cameras())
     ]
     folder = parts_folder(output)
-    results: dict[int, dict] = {}
     report = BakeReport(bake=None, path=output)  # type: ignore[arg-type]
+    keys = part_keys(int(em_size), models)
+    passes = int(coupling_passes) if coupling else 0
+    near = neighbours(space.describe())
+    if bar is not None:
+        bar.total = len(tasks) * (passes + 1)
+    count = len(space.describe()["azimuths"])
+    results = _run_pass(
+        tasks, folder, key, keys, report, bar, on_view, workers, scheduler,
+        connect_timeout, dask_workers, first=True,
+    )  # fmt: skip
+    for k in range(1, passes + 1):
+        for colour in (0, 1):  # red-black: a colour's neighbours are all of the other
+            half = [
+                replace(t, coupling_pass=k, anchors=_anchors(results, near[t.index], models))
+                for t in tasks
+                if (t.index // count + t.index % count) % 2 == colour
+            ]
+            results.update(
+                _run_pass(
+                    half, folder, key, keys, report, bar, on_view, workers, scheduler,
+                    connect_timeout, dask_workers, first=False,
+                )
+            )  # fmt: skip
+    bake = _assemble(scene_obj, tracer, space, parameters, tasks, results, int(em_size), models)
+    save_pem(output, bake)
+    shutil.rmtree(folder, ignore_errors=True)
+    report.bake = bake
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _part_name(task: ViewTask) -> str:
+    """``view-NNNNN.npz`` (independent pass), ``view-NNNNN-pass-K.npz`` (coupled pass K)."""
+    suffix = f"-pass-{task.coupling_pass}" if task.coupling_pass else ""
+    return f"view-{task.index:05d}{suffix}.npz"
+
+
+def _anchors(results: dict[int, dict], near: list[int], models: tuple[str, ...]) -> dict | None:
+    """Per model and part, (mean, count) of the neighbours' maps, or None (no neighbour).
+
+    The mean is (Σ_k 6 n_k², C) float64, levels concatenated as the solve's unknowns;
+    a neighbour where the part is absent (NaN fit PSNR) does not count.
+    """
+    if not near:
+        return None
+    first = results[near[0]]
+    out: dict[str, list] = {}
+    for model in models:
+        levels = sum(1 for name in first if name.startswith(f"{model}_") and name[-1].isdigit())
+        out[model] = []
+        for p in range(len(first[f"psnr_{model}"])):
+            seen = [w for w in near if np.isfinite(results[w][f"psnr_{model}"][p])]
+            flats = [
+                np.concatenate(
+                    [
+                        np.asarray(results[w][f"{model}_{k}"][p], np.float64).reshape(
+                            -1, results[w][f"{model}_{k}"].shape[-1]
+                        )
+                        for k in range(levels)
+                    ]
+                )
+                for w in seen
+            ]
+            out[model].append((np.mean(flats, axis=0), len(seen)) if seen else None)
+    return out
+
+
+def _run_pass(
+    tasks, folder, key, keys, report, bar, on_view, workers, scheduler, connect_timeout,
+    dask_workers, first,
+) -> dict[int, dict]:  # fmt: skip
+    """One pass over every view: reuse saved parts, bake the rest, save each as it ends."""
+    results: dict[int, dict] = {}
     for task in tasks:
-        part = _load_part(folder / f"view-{task.index:05d}.npz", key, task)
+        part = _load_part(folder / _part_name(task), key, task)
         if part is not None:
             results[task.index] = part
-            report.reused.append(task.index)
+            if first:
+                report.reused.append(task.index)
     todo = [t for t in tasks if t.index not in results]
     client = cluster = None
     if scheduler is not None and todo:  # before anything is written: it may not answer
@@ -536,23 +698,25 @@ def run_bake(
     try:
         folder.mkdir(exist_ok=True)
         if bar is not None:
-            bar.total, bar.initial, bar.n = len(tasks), len(results), len(results)
+            done = bar.n if not first else 0
+            bar.initial = bar.n = done + len(results)
             bar.refresh()
         count = min(os.cpu_count() or 1, len(todo)) if workers is None else int(workers)
         if client is not None:
             finished = _map_dask(todo, client)
         else:
             finished = _map_local(todo, max(0, min(count, len(todo))))
-        keys = part_keys(int(em_size))
         for task, result in finished:
-            _save_part(folder / f"view-{task.index:05d}.npz", key, task, result)
+            _save_part(folder / _part_name(task), key, task, result)
             results[task.index] = {k: result[k] for k in keys}
-            report.baked.append(task.index)
+            if first:
+                report.baked.append(task.index)
             report.trace_seconds.append(float(result["trace_seconds"]))
             report.infer_seconds.append(float(result["infer_seconds"]))
             if bar is not None:
+                stage = f"pass {task.coupling_pass}, " if task.coupling_pass else ""
                 bar.set_postfix_str(
-                    f"view {task.index}: trace {float(result['trace_seconds']):.1f} s, "
+                    f"{stage}view {task.index}: trace {float(result['trace_seconds']):.1f} s, "
                     f"infer {float(result['infer_seconds']):.1f} s"
                 )
                 bar.update(1)
@@ -563,15 +727,10 @@ def run_bake(
             client.close()
         if cluster is not None:
             cluster.close()
-    bake = _assemble(scene_obj, tracer, space, parameters, tasks, results, int(em_size))
-    save_pem(output, bake)
-    shutil.rmtree(folder, ignore_errors=True)
-    report.bake = bake
-    report.seconds = time.perf_counter() - start
-    return report
+    return results
 
 
-def _assemble(scene, tracer, space, parameters, tasks, results, em_size) -> PemBake:
+def _assemble(scene, tracer, space, parameters, tasks, results, em_size, models) -> PemBake:
     """The :class:`PemBake` of every view's part arrays, in view order."""
     box = distant_box(scene)
     ellipsoids, origins = [], []
@@ -586,11 +745,15 @@ def _assemble(scene, tracer, space, parameters, tasks, results, em_size) -> PemB
         view_space=space.describe(),
         parts=list(tracer.part_names),
         parameters=parameters,
-        maps={m: [np.stack([r[f"{m}_{k}"] for r in order]) for k in levels] for m in MODELS},
+        maps={m: [np.stack([r[f"{m}_{k}"] for r in order]) for k in levels] for m in models},
         hull=reflector_hulls(scene),
         mesh_checks=[mesh_check(node) for node in scene.reflectors()],
-        psnr={m: np.stack([r[f"psnr_{m}"] for r in order]) for m in MODELS},
-        playback_psnr={n: np.array([float(r[f"playback_{n}"]) for r in order]) for n in PLAYBACK},
+        psnr={m: np.stack([r[f"psnr_{m}"] for r in order]) for m in models},
+        playback_psnr={
+            n: np.array([float(r[f"playback_{n}"]) for r in order])
+            for n in PLAYBACK
+            if f"playback_{n}" in order[0]
+        },
         cameras=np.array([[t.azimuth, t.elevation] for t in tasks], dtype=np.float64),
         box=np.stack([box.lo, box.hi]),
         origins=np.array(origins, dtype=np.float64),

@@ -53,6 +53,21 @@ weak, so levels nothing looks up are defined), with range bounds kept by an
 active set (:func:`bounded_cg`). :func:`infer_mip` wraps it for one layer;
 :func:`infer_local_over` fits the local layer's premultiplied RGBA through the
 "over" with the inferred distant layer.
+
+Coupled inference (issue 31; *not in seed 003*, which infers each view alone)
+-----------------------------------------------------------------------------
+Views inferred alone disagree where the trace leaves the solve free (texels few
+pixels reach), and the playback's blend between them wobbles. The joint problem
+over all views v with neighbours N(v) on the view grid,
+
+    Σ_v ||A_v x_v − b_v||² + x_vᵀ R x_v + (γ/2) Σ_v Σ_{w∈N(v)} ||x_v − x_w||²,
+
+is solved by alternating passes (red-black block Gauss–Seidel,
+methods/pem/bake/bake.py): each view re-solved with its neighbours' latest maps
+held fixed, which adds γ|N(v)| I to the
+normal matrix and γ Σ_w x_w to the right-hand side (:func:`solve_mip`'s
+``anchor`` = the neighbours' mean and ``coupling`` = γ|N(v)|). γ = 0 is the
+independent solve, the very same arithmetic (the term is not even added).
 """
 
 from __future__ import annotations
@@ -785,6 +800,8 @@ def solve_mip(
     rtol: float = 1e-6,
     maxiter: int = 3000,
     active_rounds: int = 2,
+    anchor: npt.ArrayLike | None = None,
+    coupling: float = 0.0,
 ) -> tuple[list[np.ndarray], list[int]]:
     """Every MIP level of an EM from one least-squares solve (seed 003 §4, "EM MIPMAPs").
 
@@ -814,6 +831,12 @@ def solve_mip(
         CG stopping rule (per round).
     active_rounds
         Re-solves with the out-of-range texels fixed (0: one solve and a clip).
+    anchor
+        (Σ_k 6 n_k², C) maps the solution is drawn towards (coupled inference, module
+        docstring; not in seed 003): the neighbouring views' mean, levels concatenated.
+    coupling
+        Weight c of c ||x − anchor||² (γ |N(v)|); 0 (default) leaves the solve exactly
+        as without it. Relative to one pixel's squared error, as λ and μ.
 
     Returns
     -------
@@ -832,6 +855,14 @@ def solve_mip(
     A = sparse.csr_matrix(A)
     M = (A.T @ A + mip_regulariser(size, len(sizes), float(smoothness), float(tie))).tocsr()
     rhs = A.T @ b
+    if coupling:  # γ = 0 adds nothing at all: the independent solve, bit for bit
+        if anchor is None:
+            raise ValueError("a coupled solve needs the anchor maps")
+        anchor = np.asarray(anchor, dtype=np.float64).reshape(M.shape[0], -1)
+        if anchor.shape[1] != b.shape[1]:
+            raise ValueError(f"anchor has {anchor.shape[1]} channels, b has {b.shape[1]}")
+        M = (M + float(coupling) * sparse.identity(M.shape[0], format="csr")).tocsr()
+        rhs = rhs + float(coupling) * anchor
     x = np.zeros((M.shape[0], b.shape[1]))
     lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), b.shape[1])
     hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), b.shape[1])
@@ -962,7 +993,8 @@ def infer_local_over(
     alpha
         (R²,) the traced α_L (0 on convex-hull pixels).
     size, levels, smoothness, tie
-        As :func:`solve_mip`; other keywords go to it too.
+        As :func:`solve_mip`; other keywords go to it too (``anchor``, (N, 4): its
+        rgb to the colour solve, its α to the α solve).
 
     Returns
     -------
@@ -979,11 +1011,17 @@ def infer_local_over(
     inc = np.asarray(incident, np.float64).reshape(-1, 3)[pixels]
     dist = np.asarray(distant, np.float64).reshape(-1, 3)[pixels]
     a = np.asarray(alpha, np.float64).ravel()[pixels]
-    x_a, it_a = solve_mip(Ap, a[:, None], size, levels, smoothness, tie, 0.0, 1.0, **kw)
+    anchor = kw.pop("anchor", None)  # (N, 4): rgb for the colour solve, α for the α solve
+    if anchor is not None:
+        anchor = np.asarray(anchor, np.float64).reshape(-1, 4)
+        kw_a, kw_rgb = {**kw, "anchor": anchor[:, 3:]}, {**kw, "anchor": anchor[:, :3]}
+    else:
+        kw_a = kw_rgb = kw
+    x_a, it_a = solve_mip(Ap, a[:, None], size, levels, smoothness, tie, 0.0, 1.0, **kw_a)
     flat_a = np.concatenate([lv.reshape(-1, 1) for lv in x_a])
     a_hat = (Ap @ flat_a)[:, 0]
     rgb_target = inc - (1.0 - a_hat)[:, None] * dist
-    x_rgb, it_rgb = solve_mip(Ap, rgb_target, size, levels, smoothness, tie, 0.0, np.inf, **kw)
+    x_rgb, it_rgb = solve_mip(Ap, rgb_target, size, levels, smoothness, tie, 0.0, np.inf, **kw_rgb)
     chain = [np.concatenate([c, al], axis=-1) for c, al in zip(x_rgb, x_a, strict=True)]
     result = MipInference(
         chain, A, pixels, np.column_stack([rgb_target, a]), iterations=it_rgb + it_a

@@ -20,6 +20,9 @@ Per pixel (the playback draws one sample per pixel)
    local      x + t·r leaving the part's minimum-volume ellipsoid, minus
               the EM origin
    sphere     r (the sphere at infinity, direction only)
+   ptm        x minus the EM origin: a surface texture, the same texel for
+              a surface point from every view (seed 003 §6's PTM, Figure 7;
+              not an EM: nothing is reflected)
    ========== ============================================================
 
    (a ray that would not leave its geometry, which cannot happen from inside
@@ -62,16 +65,21 @@ __all__ = [
     "LOD_BIAS",
     "MODELS",
     "PLAYBACK",
+    "REQUIRED",
     "PixelLookups",
     "pixel_lookups",
     "trilinear_matrix",
 ]
 
-#: The EM models of a bake (seed 003 §4 and Figure 6): the layered pair and the
-#: single sphere at infinity.
-MODELS = ("distant", "local", "sphere")
+#: The maps of a bake (seed 003 §4, Figures 6 and 7): the layered pair, the single
+#: sphere at infinity, and the PTM's per-view surface texture (issue 31; §6 compares
+#: PEMs with PTMs above the plane of samples). Bakes made before issue 31 have no
+#: ``ptm`` maps (:data:`REQUIRED`).
+MODELS = ("distant", "local", "sphere", "ptm")
+#: The maps every ``.pem`` holds; the others are optional.
+REQUIRED = ("distant", "local", "sphere")
 #: Channels of each model's map: RGB; premultiplied RGBA for the local layer.
-CHANNELS = {"distant": 3, "local": 4, "sphere": 3}
+CHANNELS = {"distant": 3, "local": 4, "sphere": 3, "ptm": 3}
 #: Level bias of a bake's lookups (``PixelLookups.matrix``; the ``.pem`` stores it as
 #: ``parameters["lod_bias"]`` and the playback adds it to the level before the
 #: clamp). −2 fits ``room`` best at 128² and 256² (docs/pem/README.md): with every
@@ -79,8 +87,9 @@ CHANNELS = {"distant": 3, "local": 4, "sphere": 3}
 #: keep detail the trilinear filter of the unbiased level blurs.
 LOD_BIAS = -2.0
 #: The predicted playbacks compared with the traced composite (methods/pem/bake/models.py;
-#: seed 003 Figures 1 and 6): layered (local over distant), sphere at infinity, static EM.
-PLAYBACK = ("layered", "sphere", "static")
+#: seed 003 Figures 1, 6 and 7): layered (local over distant), sphere at infinity, static EM,
+#: the PTM's surface texture (absent from bakes made before issue 31).
+PLAYBACK = ("layered", "sphere", "static", "ptm")
 
 
 @dataclass
@@ -311,6 +320,10 @@ def pixel_lookups(
     for model in MODELS:
         if model == "sphere":
             q = r
+        elif model == "ptm":
+            q = x - origins[p_on]
+            bad = np.linalg.norm(q, axis=1) == 0
+            q[bad] = r[bad]
         else:
             q = np.empty_like(r)
             for p in np.unique(p_on):

@@ -15,6 +15,9 @@ model       C   b (the traced layer)                                 range
                 on convex-hull triangles (§4, :mod:`.hull`)          α ∈ [0, 1]
 ``sphere``  3   I = α_L·L + (1 − α_L)·D, the incident layer, with    RGB ≥ 0
                 direction-only lookups (sphere at infinity, Fig. 6)
+``ptm``     3   I, looked up by the surface point (x minus the EM     RGB ≥ 0
+                origin): a per-view surface texture, seed 003 §6's
+                PTM (Figure 7, issue 31)
 =========== === ==================================================== ============
 
 The static EM (Figure 1c, :func:`static_em`) is not inferred: it is a cube map
@@ -26,7 +29,7 @@ incident layer by A x_M in the composition of seed 003 §4::
 
     C_pred = background + Σ_p coverage_p · ((1 − F)·d + F·I_M)
     I_layered = rgb_L + (1 − α_L)·I_D   (premultiplied "over"; I_D on hull triangles)
-    I_sphere  = A_S x_S,   I_static = A_S x_static
+    I_sphere  = A_S x_S,   I_static = A_S x_static,   I_ptm = A_T x_T
 
 and :func:`playback_psnr` compares it with the traced composite over the
 interior pixels of all parts: the issue's "playback of the inferred maps
@@ -126,6 +129,9 @@ def infer_view_models(
     levels: int | None = None,
     lod_bias: float = LOD_BIAS,
     local_fit: str = "over",
+    anchors: dict[str, list[np.ndarray | None]] | None = None,
+    coupling: float = 0.0,
+    models: tuple[str, ...] = MODELS,
     **kw,
 ) -> ViewModels:
     """Infer every model's MIP chain for every part of one view (module docstring).
@@ -151,6 +157,15 @@ def infer_view_models(
         distant layer (:func:`~envstudio.methods.pem.bake.infer.infer_local_over`; its fit
         PSNR is that of the layered I); ``"premultiplied"``: fitted alone to
         b = (α_L·L, α_L) (its PSNR that of b).
+    anchors, coupling
+        Coupled inference (issue 31, not in seed 003;
+        :mod:`~envstudio.methods.pem.bake.infer`): per model, per part, None (that
+        part is not coupled) or (mean, count), the (Σ 6 n_k², C) mean of ``count``
+        neighbouring views' maps, drawn towards with weight γ·count, γ =
+        ``coupling``. 0: independent.
+    models
+        The maps to infer: :data:`MODELS` (the three of seed 003 and the PTM's), or
+        without ``ptm``.
 
     Returns
     -------
@@ -160,18 +175,30 @@ def infer_view_models(
         raise ValueError(f"local_fit {local_fit!r}: expected 'over' or 'premultiplied'")
     start = time.perf_counter()
     on_hull = hull_pixels(lookups, hull)
-    out = ViewModels(fits={m: [] for m in MODELS})
+    out = ViewModels(fits={m: [] for m in models})
+
+    def coupled(model: str, p: int) -> dict:
+        """The coupling keywords of one solve ({} when uncoupled: today's solve)."""
+        entry = None if anchors is None else anchors.get(model, [None] * (p + 1))[p]
+        if not coupling or entry is None:
+            return {}
+        mean, count = entry
+        return {"anchor": mean, "coupling": coupling * count}
+
     for p in range(len(view.part_names)):
         pixels = fit_pixels(view, lookups, p)
         if not pixels.any():
-            for model in MODELS:
+            for model in models:
                 out.fits[model].append(None)
             continue
         targets = _targets(view, p, on_hull)
 
         def solve(model, target, hi=np.inf, p=p, pixels=pixels):
             A = lookups.matrix(model, p, levels, em_size, lod_bias)
-            return infer_mip(A, pixels, target, em_size, levels, smoothness, tie, 0.0, hi, **kw)
+            return infer_mip(
+                A, pixels, target, em_size, levels, smoothness, tie, 0.0, hi,
+                **kw, **coupled(model, p),
+            )  # fmt: skip
 
         distant = solve("distant", targets["distant"])
         out.fits["distant"].append(distant)
@@ -191,11 +218,14 @@ def infer_view_models(
                 smoothness,
                 tie,
                 **kw,
+                **coupled("local", p),
             )
         else:
             local = solve("local", targets["local"], [np.inf] * 3 + [1.0])
         out.fits["local"].append(local)
         out.fits["sphere"].append(solve("sphere", targets["sphere"]))
+        if "ptm" in models:  # the surface texture shows the whole incident layer
+            out.fits["ptm"].append(solve("ptm", targets["sphere"]))
     out.seconds = time.perf_counter() - start
     return out
 
@@ -243,7 +273,11 @@ def predict(
     if static is not None:
         lv = decimated_chain(np.asarray(static, dtype=np.float64), len(mip_sizes(em_size, levels)))
         chain = np.concatenate([x.reshape(-1, 3) for x in lv])
-    names = [n for n in PLAYBACK if n != "static" or chain is not None]
+    names = [
+        n
+        for n in PLAYBACK
+        if (n != "static" or chain is not None) and (n != "ptm" or "ptm" in models.fits)
+    ]
     out = {n: view.background.reshape(npix, 3).astype(np.float64) for n in names}
     for p in range(len(view.part_names)):
         fd = models.fits["distant"][p]
@@ -257,6 +291,8 @@ def predict(
         incident = {"layered": layered, "sphere": fs.render()}
         if chain is not None:
             incident["static"] = fs.matrix @ chain
+        if "ptm" in models.fits:
+            incident["ptm"] = models.fits["ptm"][p].render()
         cov = view.coverage[p].reshape(npix, 1).astype(np.float64)
         f = view.fresnel[p].reshape(npix, 1).astype(np.float64)
         diffuse = (1.0 - f) * view.diffuse[p].reshape(npix, 3)

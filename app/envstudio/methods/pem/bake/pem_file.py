@@ -60,6 +60,11 @@ Arrays (V views in ViewSpace.cameras() order, P parts, n_k = n >> k):
                                                               radii
 ============================ ================================ ==========================
 
+Maps: ``distant``, ``local`` and ``sphere`` are in every file; ``ptm`` (the PTM's
+per-view surface textures, issue 31) is optional, listed in the header's
+``models`` when present, with its ``psnr/ptm`` and ``playback_psnr/ptm``. Files
+without it (made before) are read as they are: the format's version is unchanged.
+
 Level k is rebuilt as ``decimate^k(float32(maps/M/0)) + float32(maps/M/k)``
 (:mod:`.mip`); half floats hold |x| ≤ 65504 (larger values are clipped on save).
 Files are written atomically (io.atomic); :func:`load_pem` refuses with one line
@@ -84,7 +89,7 @@ import zstandard
 
 from envstudio.errors import InputFileError
 from envstudio.io.atomic import atomic_path
-from envstudio.methods.pem.bake.lookups import CHANNELS, MODELS, PLAYBACK
+from envstudio.methods.pem.bake.lookups import CHANNELS, MODELS, PLAYBACK, REQUIRED
 from envstudio.methods.pem.bake.mip import decimate
 
 __all__ = [
@@ -121,8 +126,9 @@ class PemBake:
     parameters : dict
         Bake parameters.
     maps : dict
-        Model (``distant``, ``local``, ``sphere``) → list over levels k of
-        (V, P, 6, n_k, n_k, C) float32 (C = 3, 4, 3), level 0 the finest.
+        Model (``distant``, ``local``, ``sphere``, and ``ptm`` where baked) → list
+        over levels k of (V, P, 6, n_k, n_k, C) float32 (C = 3, 4, 3, 3), level 0
+        the finest.
     hull : list of (T_p,) bool
         Per part, its triangles on the reflectors' convex hull.
     mesh_checks : list of dict
@@ -210,18 +216,28 @@ def _decimate(a: np.ndarray) -> np.ndarray:
 
 def _arrays(bake: PemBake) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
-    for model in MODELS:
+    models = _models(bake.maps)
+    for model in models:
         for k, level in enumerate(encode_levels(bake.maps[model])):
             out[f"maps/{model}/{k}"] = level
     for p, mask in enumerate(bake.hull):
         out[f"hull/{p}"] = np.asarray(mask, bool).astype(np.uint8)
-    for model in MODELS:
+    for model in models:
         out[f"psnr/{model}"] = np.asarray(bake.psnr[model], np.float64)
     for name in PLAYBACK:
-        out[f"playback_psnr/{name}"] = np.asarray(bake.playback_psnr[name], np.float64)
+        if name in bake.playback_psnr:
+            out[f"playback_psnr/{name}"] = np.asarray(bake.playback_psnr[name], np.float64)
     for name in _GEOMETRY:
         out[name] = np.asarray(getattr(bake, name), np.float64)
     return {k: np.ascontiguousarray(v) for k, v in out.items()}
+
+
+def _models(maps: dict) -> tuple[str, ...]:
+    """The models of ``maps`` in :data:`MODELS` order; every required one must be there."""
+    missing = [m for m in REQUIRED if m not in maps]
+    if missing:
+        raise ValueError(f"a bake needs the {', '.join(missing)} maps")
+    return tuple(m for m in MODELS if m in maps)
 
 
 def _digest(header: dict, payload: bytes) -> str:
@@ -285,7 +301,7 @@ def save_pem(path: str | os.PathLike, bake: PemBake) -> Path:
         "parts": list(bake.parts),
         "em_size": bake.em_size,
         "levels": bake.levels,
-        "models": {m: CHANNELS[m] for m in MODELS},
+        "models": {m: CHANNELS[m] for m in _models(bake.maps)},
         "parameters": bake.parameters,
         "mesh_checks": list(bake.mesh_checks),
         "arrays": entries,
@@ -380,11 +396,17 @@ def _bake(path: Path, header: dict, arrays: dict) -> PemBake:
     parts = list(header.get("parts", []))
     levels = int(header.get("levels", 0))
     expected = len(space.get("azimuths", [])) * len(space.get("elevations", []))
+    listed = header.get("models", {})
+    models = REQUIRED + tuple(m for m in MODELS if m not in REQUIRED and m in listed)
     try:
-        stored = {m: [arrays[f"maps/{m}/{k}"] for k in range(levels)] for m in MODELS}
+        stored = {m: [arrays[f"maps/{m}/{k}"] for k in range(levels)] for m in models}
         hull = [arrays[f"hull/{p}"].astype(bool) for p in range(len(parts))]
-        psnr = {m: arrays[f"psnr/{m}"].astype(np.float64) for m in MODELS}
-        playback = {n: arrays[f"playback_psnr/{n}"].astype(np.float64) for n in PLAYBACK}
+        psnr = {m: arrays[f"psnr/{m}"].astype(np.float64) for m in models}
+        playback = {
+            n: arrays[f"playback_psnr/{n}"].astype(np.float64)
+            for n in PLAYBACK
+            if n != "ptm" or "ptm" in models
+        }
         geometry = {n: arrays[n].astype(np.float64) for n in _GEOMETRY}
     except KeyError as exc:
         raise InputFileError(f"{path}: array {exc.args[0]} is missing") from None
@@ -393,7 +415,7 @@ def _bake(path: Path, header: dict, arrays: dict) -> PemBake:
         raise InputFileError(
             f"{path}: {got} views of maps for a view space of {expected} (views are missing)"
         )
-    for m in MODELS:
+    for m in models:
         for k, a in enumerate(stored[m]):
             n = header["em_size"] >> k
             if a.shape != (got, len(parts), 6, n, n, CHANNELS[m]):
@@ -406,7 +428,7 @@ def _bake(path: Path, header: dict, arrays: dict) -> PemBake:
         view_space=space,
         parts=parts,
         parameters=dict(header["parameters"]),
-        maps={m: decode_levels(stored[m]) for m in MODELS},
+        maps={m: decode_levels(stored[m]) for m in models},
         hull=hull,
         mesh_checks=list(header.get("mesh_checks", [])),
         psnr=psnr,
