@@ -135,6 +135,14 @@ def test_mesh_without_faces(capsys, tmp_path, bad_files):
         (["sh", "--env", STUDIO, "--max-env-width", "4"], ["--max-env-width 4", "at least 8"]),
         (["compare", "--methods", "mirror", "--ssaa", "0", "--out", "OUT.d"], ["--ssaa 0", "1..8"]),
         (["compare", "--methods", "mirror", "--ssaa", "2.5", "--out", "OUT.d"], ["--ssaa", "2.5"]),
+        (
+            ["render", "--method", "splitsum", "--param", "roughness=0", "-o", "OUT"],
+            ["roughness=0", "[1e-06, 1]"],
+        ),
+        (
+            ["render", "--method", "splitsum", "--param", "roughness=1.5", "-o", "OUT"],
+            ["roughness=1.5", "[1e-06, 1]"],
+        ),
     ],
 )
 def test_usage_errors(capsys, tmp_path, argv, fragments):

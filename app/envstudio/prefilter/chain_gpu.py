@@ -1,10 +1,10 @@
-"""The Phong cube mip chain on the GPU: filtered importance sampling, one pass per level and face.
+"""Cube mip chains on the GPU: filtered importance sampling, one pass per level and face.
 
 The GPU twin of prefilter.chain.prefiltered_chain (the same levels, exponents
 N_k = 2^(scale · g_k + bias) and ChainLevel results), after issue 14's "computed
 on the GPU when a context is available". The lat-long source is uploaded with
 its mip chain (``build_mipmaps``, 2×2 boxes); every level is one fragment pass
-per face of shaders/prefilter/phong_chain.glsl, which integrates the normalised
+per face of shaders/prefilter/lobe_chain.glsl, which integrates the normalised
 Phong lobe of seed 004 §4 (L_phong) by importance sampling with Křivánek and
 Colbert's filtered importance sampling (FIS, "Real-time Shading with Filtered
 Importance Sampling", EGSR 2008): sample s of pdf p_s stands for the solid angle
@@ -28,6 +28,11 @@ third to a half more accurate than a Hammersley set of the same size. Level k
 takes S · 2^k samples (:func:`level_samples`). Faces under :data:`SPLIT_EDGE` texels are
 drawn f × f times larger with the samples shared out among each texel's f × f fragments
 (:func:`split_factor`), which the read-back adds up.
+
+The same pass filters split-sum GGX levels (:func:`ggx_lobe_samples`, Karis 2013) from
+a cube on the GPU, as method ``splitsum`` does with :func:`gpu_filtered_cube`: there the
+samples are the reflections of r about GGX half vectors, and each sample carries a weight
+(the shader's second table row), ⟨r, l⟩ normalised over the set.
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.core import ggx
 from envstudio.envmap.conversions import latlong_to_cube, upload_latlong
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
@@ -48,6 +54,8 @@ __all__ = [
     "FIS_BIAS",
     "MAX_SAMPLES",
     "SPLIT_EDGE",
+    "ggx_lobe_samples",
+    "gpu_filtered_cube",
     "gpu_prefiltered_chain",
     "level_samples",
     "lobe_samples",
@@ -64,7 +72,7 @@ MAX_SAMPLES = 16384
 #: lattice for every texel there is no noise to hide, and on studio.exr 0 halved the error of
 #: +1 at 256 samples, while −1 was worse again (docs/prefilter/README.md).
 FIS_BIAS = 0.0
-_SHADER = "prefilter/phong_chain.glsl"
+_SHADER = "prefilter/lobe_chain.glsl"
 #: A level whose face is smaller is drawn split (:func:`split_factor`), so that the rasteriser
 #: (llvmpipe: 64 × 64-pixel tiles, one thread each) has several tiles to share out and each
 #: fragment a shorter loop. Measured on llvmpipe, 8 levels from 128²: levels 1–7 drew in
@@ -105,6 +113,48 @@ def lobe_samples(exponent: float, count: int, bias: float = FIS_BIAS) -> npt.NDA
     log2_omega_s = -math.log2(count) - log2_pdf
     lod = 0.5 * log2_omega_s + bias
     return np.stack([sin * np.cos(phi), sin * np.sin(phi), cos, lod], axis=1).astype(np.float32)
+
+
+def ggx_lobe_samples(
+    alpha: float, count: int, bias: float = FIS_BIAS
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+    """The split-sum GGX lobe about r (N = V = R) as a Fibonacci lattice with FIS levels.
+
+    Karis (SIGGRAPH 2013 course) prefilters with n = v = r: half vectors h are drawn
+    in proportion to D(h)(n·h) (core.ggx.half_vector_cosine at u = (i + ½)/S,
+    φ = 2π frac(i/ϕ)), l = 2 (r·h) h − r is their reflection, and the radiance is
+    Σ L(l) ⟨r, l⟩ / Σ ⟨r, l⟩ over the samples with ⟨r, l⟩ > 0. Since v·h = n·h, the
+    density of l is D(h)/4, so Ω_s = 4 / (S D(h)) (Křivánek–Colbert's FIS level).
+
+    Parameters
+    ----------
+    alpha
+        GGX α in (0, 1].
+    count
+        S, the lattice's size (those below the horizon of r are left out).
+    bias
+        Added to every level.
+
+    Returns
+    -------
+    table : (m, 4) float32
+        (x, y, z, lod) as :func:`lobe_samples`, for the m ≤ S samples above the horizon.
+    weights : (m,) float32
+        ⟨r, l⟩ over their sum.
+    """
+    i = np.arange(count, dtype=np.float64)
+    cos_h = ggx.half_vector_cosine((i + 0.5) / count, alpha)
+    sin_h = np.sqrt(np.maximum(0.0, 1.0 - cos_h * cos_h))
+    phi = 2.0 * np.pi * ((i * 0.5 * (math.sqrt(5.0) - 1.0)) % 1.0)
+    z = 2.0 * cos_h * cos_h - 1.0
+    keep = z > 0.0
+    pdf = ggx.distribution(cos_h, alpha) / 4.0
+    lod = 0.5 * (-math.log2(count) - np.log2(pdf)) + bias
+    table = np.stack(
+        [2.0 * cos_h * sin_h * np.cos(phi), 2.0 * cos_h * sin_h * np.sin(phi), z, lod], axis=1
+    )[keep]
+    weights = z[keep] / z[keep].sum()
+    return table.astype(np.float32), weights.astype(np.float32)
 
 
 def level_samples(samples: int, level: int) -> int:
@@ -199,39 +249,113 @@ def gpu_prefiltered_chain(
     quad = FullscreenPass(ctx)
     chain = []
     try:
-        source.use(0)
-        program["u_source"].value = 0
-        program["u_source_max"].value = float(coarsest)
-        program["u_texel_log2"].value = texel_log2
-        program["u_table"].value = 1
+        _bind_source(program, source, coarsest, texel_log2)
         for k, exponent in enumerate(gloss_exponents(levels, scale, bias)):
-            m = max(1, size >> k)
             count = level_samples(samples, k)
             table = lobe_samples(exponent, count, fis_bias)
-            table_tex = ctx.texture((count, 1), 4, table.tobytes(), dtype="f4")
-            table_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            split = split_factor(m, count)
-            target = ctx.texture((m * split, m * split), 4, dtype="f4")
-            fbo = ctx.framebuffer([target])
-            scope = ctx.scope(fbo, enable_only=moderngl.NOTHING)
-            try:
-                table_tex.use(1)
-                program["u_count"].value = count
-                program["u_size"].value = float(m)
-                program["u_split"].value = split
-                faces = []
-                with scope:
-                    for face in range(6):
-                        program["u_face"].value = face
-                        quad.draw(program)
-                        data = fbo.read(components=3, dtype="f4")
-                        shares = np.frombuffer(data, np.float32).reshape(m, split, m, split, 3)
-                        faces.append(shares.sum(axis=(1, 3), dtype=np.float64).astype(np.float32))
-            finally:
-                for obj in (scope, fbo, target, table_tex):
-                    obj.release()
-            chain.append(ChainLevel(np.stack(faces), exponent, rows))
+            weights = np.full(count, 1.0 / count, np.float32)
+            faces = _filter_level(ctx, program, quad, table, weights, max(1, size >> k))
+            chain.append(ChainLevel(faces, exponent, rows))
     finally:
         quad.release()
         source.release()
     return chain
+
+
+def gpu_filtered_cube(
+    ctx: moderngl.Context,
+    programs: ProgramLibrary,
+    source: moderngl.TextureCube,
+    size: int,
+    alpha: float,
+    samples: int,
+    *,
+    fis_bias: float = FIS_BIAS,
+) -> npt.NDArray[np.float32]:
+    """One split-sum GGX level (:func:`ggx_lobe_samples`) filtered from a cube on the GPU.
+
+    Parameters
+    ----------
+    ctx, programs
+        A context (OpenGL 3.3 or later) and its program library.
+    source
+        Cube map with its full mip chain, trilinear (the static environment); its
+        face edge is n_src, a power of two.
+    size
+        Face edge of the level.
+    alpha
+        GGX α of the level, in (0, 1].
+    samples
+        S, lattice points per texel.
+    fis_bias
+        Added to every sample's source level.
+
+    Returns
+    -------
+    (6, size, size, 3) float32
+        The faces in core.cubemap order.
+    """
+    n_src = source.size[0]
+    program = programs.get(_SHADER, {"SOURCE": 0})
+    quad = FullscreenPass(ctx)
+    try:
+        _bind_source(program, source, float(n_src.bit_length() - 1), math.log2(2.0 / n_src))
+        table, weights = ggx_lobe_samples(alpha, samples, fis_bias)
+        return _filter_level(ctx, program, quad, table, weights, size)
+    finally:
+        quad.release()
+
+
+def _bind_source(
+    program: moderngl.Program,
+    source: moderngl.Texture | moderngl.TextureCube,
+    coarsest: float,
+    texel_log2: float,
+) -> None:
+    """Bind ``source`` to unit 0 with its coarsest level and texel constant (lobe_chain.glsl)."""
+    source.use(0)
+    program["u_source"].value = 0
+    program["u_source_max"].value = float(coarsest)
+    program["u_texel_log2"].value = texel_log2
+    program["u_table"].value = 1
+
+
+def _filter_level(
+    ctx: moderngl.Context,
+    program: moderngl.Program,
+    quad: FullscreenPass,
+    table: npt.NDArray[np.float32],
+    weights: npt.NDArray[np.float32],
+    m: int,
+) -> npt.NDArray[np.float32]:
+    """The six (m, m, 3) faces of one level: ``table`` (S, 4) and ``weights`` (S,) drawn.
+
+    Faces under :data:`SPLIT_EDGE` are drawn split (:func:`split_factor`) and their
+    blocks added here.
+    """
+    count = len(table)
+    rows = np.zeros((2, count, 4), np.float32)
+    rows[0], rows[1, :, 0] = table, weights
+    table_tex = ctx.texture((count, 2), 4, rows.tobytes(), dtype="f4")
+    table_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    split = split_factor(m, count)
+    target = ctx.texture((m * split, m * split), 4, dtype="f4")
+    fbo = ctx.framebuffer([target])
+    scope = ctx.scope(fbo, enable_only=moderngl.NOTHING)
+    try:
+        table_tex.use(1)
+        program["u_count"].value = count
+        program["u_size"].value = float(m)
+        program["u_split"].value = split
+        faces = []
+        with scope:
+            for face in range(6):
+                program["u_face"].value = face
+                quad.draw(program)
+                data = fbo.read(components=3, dtype="f4")
+                shares = np.frombuffer(data, np.float32).reshape(m, split, m, split, 3)
+                faces.append(shares.sum(axis=(1, 3), dtype=np.float64).astype(np.float32))
+    finally:
+        for obj in (scope, fbo, target, table_tex):
+            obj.release()
+    return np.stack(faces)

@@ -10,6 +10,10 @@ BRDF values") is a difference of k̂, i.e. of the paper's Phong BRDF with k_s = 
 - Phong (seed 004 §4, Heidrich's and Miller's map): k(c) = (N + 1)/2π · max(c, 0)^N,
   c = ⟨r_v, l⟩, normalised as seed 000 eq. 7 so a constant L gives L; the shape
   is floored at e^−80 ≈ 2·10⁻³⁵ (never subnormal in float32).
+- GGX (split sum, Karis 2013): k(c) = D(h)/4 · max(c, 0) / W(α), c = ⟨r, l⟩, h the half
+  vector of r and l (n·h = √((1 + c)/2)) with n = v = r: what method ``splitsum``
+  prefilters per level (prefilter.chain_gpu.ggx_lobe_samples), normalised by
+  core.ggx.reflected_lobe_integral so a constant L gives L.
 - lobe (seed 004 §4, Kautz–McCool's 2D approximation): a tabulated radially
   symmetric p(c), linear between the rows of a two-column CSV (cosine, value),
   zero outside the tabulated cosines; not renormalised.
@@ -29,9 +33,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.core import ggx as ggx_model
 from envstudio.errors import InputFileError, ParameterError
 
-__all__ = ["KERNELS", "Kernel", "diffuse", "lobe", "phong", "read_lobe_table"]
+__all__ = ["KERNELS", "Kernel", "diffuse", "ggx", "lobe", "phong", "read_lobe_table"]
 
 KERNELS = ("diffuse", "phong", "lobe")
 
@@ -50,11 +55,11 @@ class Kernel:
     Attributes
     ----------
     name
-        "diffuse", "phong" or "lobe".
+        "diffuse", "phong", "ggx" or "lobe".
     scale
         Peak value of k, in 1/sr.
     exponent
-        Phong N (1 for diffuse, 0 for a lobe).
+        Phong N (1 for diffuse, 0 for a lobe); GGX α for "ggx".
     lut
         Lobe only: (_LUT_SIZE + 1,) float32 samples of k̂ at c = −1 … 1.
     """
@@ -87,6 +92,12 @@ class Kernel:
             np.log(cos, out=cos)
             np.multiply(cos, np.float32(self.exponent), out=cos)
             return np.exp(cos, out=cos)
+        if self.name == "ggx":
+            # D(h)/D(1) · max(c, 0) with (n·h)² = (1 + c)/2: α⁴ c / (α² + (1 − α²)(1 − c)/2)²
+            a2 = np.float32(self.exponent**2)
+            c = np.maximum(cos, 0.0, out=cos)
+            denominator = (np.float32(1.0) - c) * np.float32(0.5) * (np.float32(1.0) - a2) + a2
+            return np.multiply(c, a2 * a2 / (denominator * denominator), out=cos)
         return _lookup(self.lut, cos)
 
     @property
@@ -136,7 +147,7 @@ class Kernel:
 
     def _power_bound(self, lo: np.ndarray, hi: np.ndarray, order: int) -> np.ndarray:
         """max |d^order/dc^order max(c, 0)^N| over [lo, hi] (:meth:`derivative_bound`)."""
-        if self.lut is not None:
+        if self.lut is not None or self.name == "ggx":
             return np.full(np.shape(hi), np.inf, np.float32)
         n = self.exponent
         factor = math.prod(n - k for k in range(order))
@@ -180,6 +191,20 @@ def phong(exponent: float) -> Kernel:
     if not 0.0 < exponent <= 1e5:
         raise ParameterError(f"--exponent {exponent:g}: expected a Phong exponent in (0, 100000]")
     return Kernel("phong", (exponent + 1.0) / (2.0 * math.pi), float(exponent))
+
+
+def ggx(alpha: float) -> Kernel:
+    """The split-sum GGX lobe about r, n = v = r (module docstring; Karis 2013).
+
+    Raises
+    ------
+    ParameterError
+        Unless 0 < α ≤ 1.
+    """
+    if not 0.0 < alpha <= 1.0:
+        raise ParameterError(f"roughness={alpha:g}: expected a GGX alpha in (0, 1]")
+    peak = float(ggx_model.distribution(1.0, alpha)) / 4.0
+    return Kernel("ggx", peak / ggx_model.reflected_lobe_integral(alpha), float(alpha))
 
 
 def lobe(cosines: npt.ArrayLike, values: npt.ArrayLike, source: str = "lobe table") -> Kernel:
