@@ -28,6 +28,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--compare", metavar="METHOD", help="start in split screen against this method"
     )
     parser.add_argument(
+        "--grid",
+        nargs="?",
+        const="all",
+        metavar="METHODS",
+        help="start in the grid view: every method, or these (comma-separated), in tiles",
+    )
+    parser.add_argument(
         "--hide-panels",
         action="store_true",
         help="start with the panels hidden (Tab shows them)",

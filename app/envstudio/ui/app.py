@@ -39,8 +39,9 @@ from moderngl_window.context.base import BaseWindow, KeyModifiers
 from moderngl_window.timers.clock import Timer
 
 from envstudio.core.parameters import ParameterValues
+from envstudio.engine.grid_view import GridView, tile_layout
 from envstudio.engine.method import Method
-from envstudio.engine.registry import available_methods, method_class
+from envstudio.engine.registry import available_methods, ground_truth_class, method_class
 from envstudio.engine.session import RenderSession
 from envstudio.engine.split_view import SplitView
 from envstudio.errors import ParameterError, UserError
@@ -64,6 +65,7 @@ from envstudio.ui.capture import (
 from envstudio.ui.compare_panel import CompareState, compare_panel
 from envstudio.ui.docking import DockLayout, ViewRect, gl_viewport
 from envstudio.ui.file_dialogs import OpenFileDialog
+from envstudio.ui.grid import GridMetrics, GridState, draw_labels
 from envstudio.ui.imgui_input import ImGuiInput
 from envstudio.ui.imgui_renderer import ImGuiRenderer
 from envstudio.ui.jobs import DeferredWork
@@ -124,6 +126,7 @@ class RunOptions:
     cycle_methods: bool = False
     compare: str | None = None
     hide_panels: bool = False
+    grid: list[str] | None = None
 
 
 def run_viewer(args: argparse.Namespace) -> int:
@@ -155,6 +158,11 @@ def run_viewer(args: argparse.Namespace) -> int:
         method_class(args.method)
     if args.compare:
         method_class(args.compare)
+    grid = None
+    if getattr(args, "grid", None) is not None:
+        grid = [name for name in args.grid.split(",") if name] if args.grid != "all" else []
+        for name in grid:
+            method_class(name)
     settings, warning = load_settings()
     warnings = [warning] if warning else []
     start = _start_scene(args, settings, warnings)
@@ -170,7 +178,12 @@ def run_viewer(args: argparse.Namespace) -> int:
             settings=settings,
             method=args.method,
             options=RunOptions(
-                args.frames, screenshot, args.cycle_methods, args.compare, args.hide_panels
+                args.frames,
+                screenshot,
+                args.cycle_methods,
+                args.compare,
+                args.hide_panels,
+                grid,
             ),
             warnings=warnings,
         )
@@ -264,6 +277,13 @@ def restore_camera(camera: OrbitCamera, saved: dict) -> list[str]:
     return problems
 
 
+def _ground_truth_name() -> str | None:
+    try:
+        return ground_truth_class().name
+    except ParameterError:  # no plugin declares one: the grid shows no PSNR / FLIP
+        return None
+
+
 def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
@@ -316,6 +336,13 @@ class Viewer(WindowConfig):
         self.camera_control = CameraControl(wnd.mouse.left, wnd.mouse.right)
         self.compare = CompareState(other=options.compare)
         self.split_view = SplitView(self.session.renderer)
+        self.grid = GridState()
+        self.grid_view = GridView(self.session.renderer)
+        self.grid_metrics = GridMetrics(self.session.renderer, _ground_truth_name())
+        self.grid_labels: list[tuple[float, float, float, float]] = []
+        if options.grid is not None:
+            self.grid.picked = list(options.grid)
+            self.grid.enter()
         self.history = FrameHistory()
         self.capture = CaptureOptions(str(default_captures_dir()))
         self._capture_request: CaptureRequest | None = None
@@ -448,23 +475,33 @@ class Viewer(WindowConfig):
             self._panels(view_size)
         if self.layout.toggle_panels:  # View > Hide panels; from the next frame
             self.panels_shown = False
-        self.status.draw(self.view)
+        request, self._capture_request = self._capture_request, None
+        # the grid's capture is the view with its labels, read after the UI: no status line
+        grid_capture = self.grid.on and request is not None and not request.with_ui
+        self.status.mode_text = self.grid.scale.status() if self.grid.on else None
+        if not grid_capture:
+            self.status.draw(self.view)
         screen = self.ctx.screen
-        if viewport != (0, 0, *size):  # the panels' background
+        if viewport != (0, 0, *size) or self.grid.on:  # the panels' background, the gaps
             screen.use()
             screen.clear(0.0, 0.0, 0.0, 1.0, viewport=(0, 0, *size))
-        request, self._capture_request = self._capture_request, None
         if view_size[0] >= 1 and view_size[1] >= 1:
-            self._render_view(view_size, viewport, frametime)
-            if request and not request.with_ui:
-                self._take_capture(request, view_size, viewport[:2])
+            if self.grid.on:
+                self._render_grid(viewport, frametime)
+            else:
+                self._render_view(view_size, viewport, frametime)
+                if request and not request.with_ui:
+                    self._take_capture(request, view_size, viewport[:2])
 
         imgui.render()
         self.wnd.use()
         self.gui.render(imgui.get_draw_data())
         self.jobs.mark_shown()
-        if request and request.with_ui:
-            self._take_capture(request, size)
+        if request and (request.with_ui or grid_capture):
+            if grid_capture:
+                self._take_capture(request, viewport[2:], viewport[:2])
+            else:
+                self._take_capture(request, size)
 
         self.frames_drawn += 1
         if self.options.frames and self.frames_drawn >= self.options.frames:
@@ -513,6 +550,43 @@ class Viewer(WindowConfig):
             self._render_error = None
             self.history.add(frametime * 1e3, stats)
 
+    def _render_grid(self, viewport: tuple[int, int, int, int], frametime: float) -> None:
+        """Every method picked, one tile each, into ``viewport`` under the shared camera,
+        matched to the method on show when matching is on; then the tiles' labels."""
+        grid = self.grid
+        if grid.scale.observe(frametime * 1e3):
+            grid.numbers.clear()
+        names = grid.names(list(self.methods))
+        grid.tiles = tile_layout(names, viewport, grid.scale.fraction)
+        main = self.method(self.method_name)
+        methods = {name: self.method(name) for name in names}
+        if self.compare.match:
+            for method in methods.values():
+                if method is not main:
+                    match_glossiness(method, main, self.session.gpu_scene.cube_size)
+        stats, errors = self.grid_view.render(
+            self.session.gpu_scene, methods, self.session.camera, grid.tiles, self.ctx.screen
+        )
+        grid.record_times({name: s.total_ms for name, s in stats.items()}, errors)
+        if errors:  # each in its tile's label too
+            self._report_render_error("; ".join(f"{n}: {e}" for n, e in errors.items()))
+        else:
+            self._render_error = None
+        if stats:  # the Stats panel: the main method's passes (else the first tile's)
+            shown = stats.get(self.method_name) or next(iter(stats.values()))
+            self.history.add(frametime * 1e3, shown)
+        if self.grid_metrics.due(grid.tiles):
+            self.grid_metrics.measure(
+                grid, methods, self.session.gpu_scene, self.session.camera, self.ctx.screen
+            )
+        scale, buffer_height = self._pixel_scale(), self.wnd.buffer_size[1]
+        self.grid_labels = draw_labels(grid, scale, buffer_height)
+
+    def _pixel_scale(self) -> tuple[float, float]:
+        """Framebuffer pixels per window point (x, y)."""
+        (w, h), (bw, bh) = self.wnd.size, self.wnd.buffer_size
+        return (bw / w if w else 1.0, bh / h if h else 1.0)
+
     def _report_render_error(self, message: str) -> None:
         """Show a method's one-line error (and print it once) instead of quitting."""
         if message != self._render_error:
@@ -536,7 +610,7 @@ class Viewer(WindowConfig):
             self.control, self.session.renderer.display, self.dialogs, self.jobs, self.status
         )
         stats_panel(self.history, size)
-        compare_panel(self.methods, self.method_name, self.compare)
+        compare_panel(self.methods, self.method_name, self.compare, self.grid)
         if capture_panel(self.capture):
             self._request_capture(self.capture.fmt)
 
@@ -552,10 +626,12 @@ class Viewer(WindowConfig):
 
     def _request_capture(self, fmt: str) -> None:
         """Take a capture of ``fmt`` during the next frame."""
+        if self.grid.on and fmt != "png":
+            self.status.error(f"grid view: {fmt} capture is of one method; click its tile first")
+            return
+        label = "grid" if self.grid.on else self.method_name
         try:
-            path = capture_path(
-                self.capture.folder, self.control.scene_label, self.method_name, fmt
-            )
+            path = capture_path(self.capture.folder, self.control.scene_label, label, fmt)
         except UserError as exc:
             self.status.error(str(exc))
             return
@@ -606,6 +682,8 @@ class Viewer(WindowConfig):
         self.gui_input.on_mouse_press_event(x, y, button)
         over_panel = self.gui_input.want_capture_mouse
         view = self.view
+        if self.grid.on and not over_panel:
+            self.grid.press = (x, y)
         on_divider = not over_panel and self.compare.grab(x - view.x, view.width)
         self.camera_control.press(button, self.wnd.modifiers.shift, over_panel or on_divider)
 
@@ -614,6 +692,12 @@ class Viewer(WindowConfig):
         self.gui_input.on_mouse_release_event(x, y, button)
         self.camera_control.release()
         self.compare.dragging = False
+        press, self.grid.press = self.grid.press, None
+        if self.grid.on and press is not None and button == self.wnd.mouse.left:
+            clicked = self.grid.click(press, (x, y), self._pixel_scale(), self.wnd.buffer_size[1])
+            if clicked:  # that method alone, as the main view
+                self.select_method(clicked)
+                self.grid.leave()
 
     def on_mouse_drag_event(self, x: int, y: int, dx: int, dy: int) -> None:
         """Drags orbit or pan the camera (if the gesture started outside the panels)."""
@@ -644,6 +728,8 @@ class Viewer(WindowConfig):
         self.dialogs.mesh.close()
         self.gui.release()
         self.split_view.release()
+        self.grid_view.release()
+        self.grid_metrics.release()
         implot.destroy_context()
         imgui.destroy_context()
         self.session.release()

@@ -15,6 +15,7 @@ from envstudio.core.colormap import magma
 from envstudio.engine.method import Method
 from envstudio.engine.split_view import SplitSettings
 from envstudio.ui.docking import PANEL_FLAGS
+from envstudio.ui.grid import GridState, grid_section
 
 OFF = "off"
 """Combo entry for no comparison."""
@@ -45,8 +46,14 @@ class CompareState:
             self.settings.divider = min(max(x / view_width, 0.0), 1.0)
 
 
-def compare_panel(methods: dict[str, type[Method]], current: str, state: CompareState) -> None:
-    """Edit ``state``: the method compared against, split, divider, heat map and its scale."""
+def compare_panel(
+    methods: dict[str, type[Method]],
+    current: str,
+    state: CompareState,
+    grid: GridState | None = None,
+) -> None:
+    """Edit ``state``: the method compared against, split, divider, heat map and its scale;
+    with ``grid``, the grid view and the methods it tiles (the grid wins over the split)."""
     if imgui.begin("Compare", None, PANEL_FLAGS)[0]:
         names = [OFF, *(n for n in methods if n != current)]
         chosen = state.other if state.other in names else OFF
@@ -76,6 +83,8 @@ def compare_panel(methods: dict[str, type[Method]], current: str, state: Compare
                 settings.heat_scale = value
             if settings.heat:
                 _colour_bar(settings.heat_scale)
+        if grid is not None:
+            grid_section(list(methods), grid)
     imgui.end()
 
 

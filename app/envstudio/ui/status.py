@@ -34,6 +34,8 @@ class StatusLine:
         self.error_text: str | None = None
         self.note_text: str | None = None
         self.busy_text: str | None = None
+        self.mode_text: str | None = None
+        """What the view is doing, in grey until replaced (the grid's tile size)."""
 
     def error(self, message: str) -> None:
         """Show ``message`` in red (one line per problem; long lines wrap)."""
@@ -46,7 +48,7 @@ class StatusLine:
     def draw(self, area: ViewRect | None = None) -> None:
         """Draw the line, if there is anything to say, at the bottom-left of ``area`` (the
         3D view; default the whole display), between ``new_frame`` and ``render``."""
-        if not (self.error_text or self.note_text or self.busy_text):
+        if not (self.error_text or self.note_text or self.busy_text or self.mode_text):
             return
         if area is None:
             display = imgui.get_io().display_size
@@ -68,5 +70,7 @@ class StatusLine:
                 self.error_text = None
         if self.note_text:
             imgui.text_colored(NOTE_COLOUR, self.note_text)
+        if self.mode_text:
+            imgui.text_colored(NOTE_COLOUR, self.mode_text)
         imgui.pop_text_wrap_pos()
         imgui.end()
