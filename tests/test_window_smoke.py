@@ -23,10 +23,12 @@ import numpy as np
 import pytest
 from imgui_bundle import imgui
 
+from envstudio.engine.grid_view import tile_layout
 from envstudio.engine.registry import available_methods
 from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
+from envstudio.measure.matching import match_glossiness
 from envstudio.ui.app import CYCLE_FRAMES
 from envstudio.ui.docking import PANELS, ViewRect, gl_viewport
 
@@ -66,11 +68,16 @@ def xvfb() -> Iterator[str]:
 
 
 def run_view(
-    config_dir: Path, display: str | None, *options: str, probe: Path | None = None
+    config_dir: Path,
+    display: str | None,
+    *options: str,
+    probe: Path | None = None,
+    env: dict[str, str] | None = None,
 ) -> subprocess.CompletedProcess:
     """``python -m envstudio view *options`` with its own settings folder and ``display``;
-    with ``probe``, through tests/window_probe.py, which writes the last frame's layout there."""
-    env = dict(os.environ, ENVSTUDIO_CONFIG_DIR=str(config_dir))
+    with ``probe``, through tests/window_probe.py, which writes the last frame's layout there;
+    ``env`` adds environment variables."""
+    env = dict(os.environ, **(env or {}), ENVSTUDIO_CONFIG_DIR=str(config_dir))
     env.pop("WAYLAND_DISPLAY", None)
     env.pop("DISPLAY", None)
     if display:
@@ -314,3 +321,113 @@ def test_the_reference_in_the_window_shows_no_black_reflector_after_ten_frames(x
     assert shown_black.sum() < 1e-3 * reflector.sum()
     wrong = np.argwhere(shown_black & ~estimate_black)
     assert len(wrong) == 0, f"black in the window, not in the estimate: {wrong[:10].tolist()}"
+
+
+def matched_session(names: list[str]) -> RenderSession:
+    """A headless session of the default scene whose methods ``names`` are set up as the grid
+    sets them: glossiness matched to the first (the method on show), cameras steered; each
+    rendered once (so bakes are made and cached, as for a user's second run)."""
+    session = RenderSession(build_scene())
+    methods = {name: session.method(name) for name in names}
+    main = methods[names[0]]
+    for method in methods.values():
+        if method is not main:
+            match_glossiness(method, main, session.gpu_scene.cube_size)
+    for method in methods.values():
+        method.steer_camera(session.camera)
+    for name in names:
+        session.render_offscreen(name, (32, 32))
+    return session
+
+
+def test_the_grid_view_tiles_every_method_each_as_its_headless_render(xvfb, tmp_path):
+    """Issue 29: `view --grid` tiles every method under one camera, in the docked view;
+    outside its label each tile is, pixel for pixel, the method rendered headless at the
+    tile's size. The bakes (rsibr's sphere maps) are cached first, so every tile shows its
+    finished method; the reference, progressive, shows its first frames. F12 on the last
+    frame captures the grid as one PNG with the labels: the view's pixels on screen."""
+    config = tmp_path / "config"
+    config.mkdir()
+    (config / "settings.json").write_text(json.dumps({"window_size": [960, 600]}))
+    shot = tmp_path / "grid.png"
+    probe = tmp_path / "probe.json"
+    names = list(available_methods())
+    session = matched_session(names)
+    try:
+        result = run_view(
+            config,
+            xvfb,
+            *("--method", names[0], "--grid", "--frames", "3", "--screenshot", str(shot)),
+            probe=probe,
+            env={"ENVSTUDIO_PROBE_KEY": "2,F12", "XDG_PICTURES_DIR": str(tmp_path / "pictures")},
+        )
+        assert result.returncode == 0, result.stderr
+        assert envstudio_lines(result.stderr) == [], "a tile reported an error"
+        record = json.loads(probe.read_text())
+        tiles = record["grid"]["tiles"]
+        headless = {}
+        for tile in tiles:
+            session.render_offscreen(tile["name"], tuple(tile["size"]))
+            headless[tile["name"]] = session.read_ldr()
+    finally:
+        session.release()
+    grid = record["grid"]
+    assert grid["on"] and grid["fraction"] == 1.0 and grid["status"] is None
+    assert [tile["name"] for tile in tiles] == names
+
+    # the tiles lie inside the view, apart, each rendered at its viewport's size
+    vx, vy, vw, vh = record["viewport"]
+    for i, tile in enumerate(tiles):
+        x, y, w, h = tile["viewport"]
+        assert tile["size"] == [w, h]
+        assert vx <= x and vy <= y and x + w <= vx + vw and y + h <= vy + vh
+        for other in tiles[i + 1 :]:
+            ox, oy, ow, oh = other["viewport"]
+            assert x + w <= ox or ox + ow <= x or y + h <= oy or oy + oh <= y
+
+    image = np.round(read_image(shot)[..., :3] * 255.0).astype(np.int16)
+    (capture,) = (tmp_path / "pictures" / "envmap-studio").glob("*-grid-*.png")
+    np.testing.assert_array_equal(
+        np.round(read_image(capture)[..., :3] * 255.0), view_pixels(image, record)
+    )
+    for tile, label in zip(tiles, grid["labels"], strict=True):
+        name = tile["name"]
+        shown = view_pixels(image, {"viewport": tile["viewport"]})
+        x, y, w, h = tile["viewport"]
+        top = image.shape[0] - (y + h)
+        outside = np.ones(shown.shape[:2], dtype=bool)  # the label's box (points = pixels)
+        lx, ly, lw, lh = label
+        outside[
+            max(int(ly) - top, 0) : int(np.ceil(ly + lh)) - top,
+            max(int(lx) - x, 0) : int(np.ceil(lx + lw)) - x,
+        ] = False
+        assert 0.6 < outside.mean() < 1.0, f"{name}: no label or a huge one"
+        assert shown[~outside].std() > 10.0, f"{name}: no text in its label"
+        if name == "reference":  # progressive: its first frames, not the headless batch
+            assert shown[outside].std() > 10.0
+            continue
+        np.testing.assert_array_equal(shown[outside], headless[name][outside], err_msg=name)
+
+
+def test_clicking_a_grid_tile_makes_its_method_the_main_view(xvfb, tmp_path):
+    """Issue 29: a click (press and release through the viewer's input handlers) on the
+    hwconv tile leaves the grid with hwconv shown alone, at the whole view's size."""
+    config = tmp_path / "config"
+    config.mkdir()
+    (config / "settings.json").write_text(json.dumps({"window_size": list(WINDOW)}))
+    probe = tmp_path / "probe.json"
+    # panels hidden: the view is the window, so the tiles are known before the run
+    tiles = tile_layout(["mirror", "hwconv"], (0, 0, *WINDOW))
+    x, y, w, h = tiles[1].viewport  # GL pixels = points here; the centre from the top-left
+    env = {"ENVSTUDIO_PROBE_CLICK": f"1,{x + w // 2},{WINDOW[1] - (y + h // 2)}"}
+    result = run_view(
+        config,
+        xvfb,
+        *("--method", "mirror", "--grid", "mirror,hwconv", "--hide-panels", "--frames", "2"),
+        probe=probe,
+        env=env,
+    )
+    assert result.returncode == 0, result.stderr
+    record = json.loads(probe.read_text())
+    assert record["method"] == "hwconv"
+    assert not record["grid"]["on"] and record["render_size"] == list(WINDOW)

@@ -7,12 +7,20 @@ rectangle (the dock space's central node, points), its GL viewport (framebuffer
 pixels, origin bottom-left), the size the scene was rendered at, the window and
 framebuffer sizes, and each panel's window rectangle, whether it is docked and
 whether it is on show (a tab behind another is not).
+In the grid view it records the tiles (method, GL viewport, render size), the tile
+fraction, the labels' boxes (window points) and the status line's grid text.
 The window tests (tests/test_window_smoke.py) read it beside the screenshot.
+
+``ENVSTUDIO_PROBE_CLICK=FRAME,X,Y`` presses and releases the left button at window
+point (X, Y) before frame FRAME (counted from 0) through the viewer's own input
+handlers, as the window toolkit would; ``ENVSTUDIO_PROBE_KEY=FRAME,NAME`` presses key NAME
+(moderngl-window's name, e.g. F12) before frame FRAME.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
 from dataclasses import asdict
 from typing import ClassVar
@@ -30,6 +38,20 @@ class ProbedViewer(app.Viewer):
     record: ClassVar[dict] = {}
 
     def on_render(self, time: float, frametime: float) -> None:
+        click = os.environ.get("ENVSTUDIO_PROBE_CLICK")
+        if click:
+            frame, x, y = (int(v) for v in click.split(","))
+            if frame == self.frames_drawn:
+                left = self.wnd.mouse.left
+                self.on_mouse_position_event(x, y, 0, 0)
+                self.on_mouse_press_event(x, y, left)
+                self.on_mouse_release_event(x, y, left)
+        key = os.environ.get("ENVSTUDIO_PROBE_KEY")
+        if key:
+            frame, name = key.split(",")
+            if int(frame) == self.frames_drawn:
+                keys = self.wnd.keys
+                self.on_key_event(getattr(keys, name), keys.ACTION_PRESS, self.wnd.modifiers)
         super().on_render(time, frametime)
         hdr = self.session.renderer.hdr_texture
         panels = {}
@@ -51,6 +73,16 @@ class ProbedViewer(app.Viewer):
             "buffer_size": list(self.wnd.buffer_size),
             "panels": panels,
             "method": self.method_name,
+            "grid": {
+                "on": self.grid.on,
+                "fraction": self.grid.scale.fraction,
+                "tiles": [
+                    {"name": t.name, "viewport": list(t.viewport), "size": list(t.render_size)}
+                    for t in self.grid.tiles
+                ],
+                "labels": [list(box) for box in self.grid_labels] if self.grid.on else [],
+                "status": self.status.mode_text,
+            },
         }
 
 
