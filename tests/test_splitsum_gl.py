@@ -95,11 +95,11 @@ def test_gpu_level_matches_the_cpu_ggx_prefilter(gl_ctx):
 
 
 def test_importance_sampled_limit_agrees_with_the_split_sum_face_on(gl_ctx):
-    """samples=N in a constant environment: the DFG integral per pixel (n = v = r at the centre)."""
+    """lobe_samples=N in a constant environment: the DFG integral per pixel."""
     session = RenderSession(sphere_scene(Environment.constant((1.0, 1.0, 1.0))), ctx=gl_ctx)
     values = dict(FAST, fresnel=0.5, kd=0.0, roughness=0.4, multiscatter=False)
     split = render(session, "splitsum", **values)
-    sampled = render(session, "splitsum", samples=32, **values)
+    sampled = render(session, "splitsum", lobe_samples=32, **values)
     hit, normal, view = sphere_geometry(session.camera)
     core = hit & (np.sum(normal * view, -1) > 0.5)
     assert sampled[core].mean() == pytest.approx(split[core].mean(), rel=0.01)

@@ -5,7 +5,7 @@
 // L_pre from two levels of the GGX-prefiltered chain (N = V = R, prefilter/lobe_chain.glsl),
 // (A, B) = DFG table at (n.v, sqrt(alpha)), c = 1 + f0 (1 / (A + B) - 1) with multiscatter
 // (Fdez-Aguera 2019, as Filament), else 1; E(n) from SH plus cap lights.
-// With SAMPLED, L_pre (f0 A + B) is replaced by u_samples importance samples of the true
+// With SAMPLED (lobe_samples > 0), L_pre (f0 A + B) is replaced by u_samples importance samples of the true
 // view-dependent lobe per pixel: half vectors h ~ D(h) (n.h), l = reflect(-v, h), weight
 // F(v.h) G2 (v.h) / ((n.h)(n.v)), each read from the environment's mip level whose texels
 // cover 1 / (u_samples pdf(l)) (filtered importance sampling, Krivanek & Colbert 2008).

@@ -30,7 +30,9 @@ Parameter matching
     that blurs a mip chain by a LOD bias (declares ``lod_bias`` but not
     ``phong_exponent``) gets the b that looks like the reference's Phong
     exponent N on this session's cube (prefilter/glossiness.py), unless
-    ``--param lod_bias=…`` sets it.
+    ``--param lod_bias=…`` sets it. A method with a GGX ``roughness`` gets the α of the
+    reference's N (α = √(2 / (4N + 2))), unless ``--param roughness=…`` sets it; the
+    reference of its group then takes the N of that α.
 
 Reliability
     A method's metrics are reliable when the reference converged or its noise
@@ -66,7 +68,7 @@ from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
 from envstudio.measure.ground_truth import SCENE_EFFECTS, ConvergenceStatus, GroundTruth
-from envstudio.measure.matching import match_glossiness
+from envstudio.measure.matching import match_glossiness, match_roughness
 from envstudio.measure.stopping import (
     NOISE_RULE,
     NOISE_SHARE,
@@ -532,9 +534,14 @@ def _reference_values(
     """The ground truth's values for ``model``: the model, and for a model other than its own
     the material parameters it shares with the group's first method (its paper's material)."""
     values: dict[str, object] = {"model": model}
-    if model == base["model"] or not members:
+    if not members:
         return values
     method = session.method(members[0])
+    if "roughness" in method.values and "phong_exponent" in reference.values:
+        match_roughness(reference, method)  # the group's GGX alpha as the reference's N
+        values["phong_exponent"] = reference.values["phong_exponent"]
+    if model == base["model"]:
+        return values
     shared = [p.name for p in method.values if p.name in reference.values and p.name != "model"]
     return values | {name: method.values[name] for name in shared}
 
@@ -582,7 +589,7 @@ def _render_method(
     method = session.method(name)
     method.values.update(values)
     glossiness = None
-    if "lod_bias" not in values:
+    if "lod_bias" not in values and "roughness" not in values:
         glossiness = match_glossiness(method, reference, session.gpu_scene.cube_size)
     fine = (size[0] * ssaa, size[1] * ssaa)
     session.render_offscreen(method, fine)

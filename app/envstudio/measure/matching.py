@@ -5,6 +5,10 @@ Methods that blur a mip chain by a LOD bias b (declaring ``lod_bias`` but not
 fitted mapping of prefilter/glossiness.py (seed 000 Figure 5 pairs N = 225 with
 b = 2.25). Shared material parameters (f_λ, k_d) are copied as they are.
 
+A method with a GGX ``roughness`` α (``splitsum``) and one with a Phong exponent N
+(the reference, whose ``model=microfacet`` renders α = √(2 / (4N + 2)), core.ggx) are
+matched through that same mapping, both ways (:func:`match_roughness`).
+
 The fit relates N to the mip level b itself. A mip method that declares
 ``lod_mode`` is therefore matched at ``lod_mode=level``. Under the paper's
 ``lod_mode=bias`` the lookup reads level b plus the hardware's screen-space LOD,
@@ -21,10 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from envstudio.core.ggx import alpha_for_exponent, exponent_for_alpha
 from envstudio.engine.method import Method
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
 
-SHARED = ("fresnel", "kd", "phong_exponent", "lod_bias")
+SHARED = ("fresnel", "kd", "phong_exponent", "lod_bias", "roughness")
 MATCH_LOD_MODE = "level"
 """The ``lod_mode`` a mip method is matched at: b is then the level the fit relates to N."""
 
@@ -102,6 +107,9 @@ def match_glossiness(target: Method, source: Method, cube_size: int) -> str | No
     for name in ("fresnel", "kd"):
         if name in source.values and name in target.values:
             target.values[name] = source.values[name]
+    line = match_roughness(target, source)
+    if line is not None:
+        return line
     source_b = "lod_bias" in source.values and "phong_exponent" not in source.values
     target_b = "lod_bias" in target.values and "phong_exponent" not in target.values
     if source_b == target_b:
@@ -123,4 +131,35 @@ def match_glossiness(target: Method, source: Method, cube_size: int) -> str | No
         clamp = "" if n == fitted else f" (fit {fitted:.1f}, clamped)"
         line = f"N = {n:.1f} matched to b = {bias:g} on a {cube_size}² cube{clamp}"
         return line + _hardware_lod_caveat(source)
+    return None
+
+
+def match_roughness(target: Method, source: Method) -> str | None:
+    """GGX α ↔ Phong N by the reference's α = √(2 / (4N + 2)) (core.ggx), either way.
+
+    Parameters
+    ----------
+    target
+        The method whose ``roughness`` or ``phong_exponent`` is set.
+    source
+        The method it is matched to; exactly one of the two declares ``roughness``.
+
+    Returns
+    -------
+    str or None
+        One line saying how it was matched, or None when neither way applies.
+    """
+    target_alpha, source_alpha = "roughness" in target.values, "roughness" in source.values
+    if target_alpha and not source_alpha and "phong_exponent" in source.values:
+        exponent = float(source.values["phong_exponent"])
+        target.values["roughness"] = alpha = _clamped(
+            target, "roughness", alpha_for_exponent(exponent)
+        )
+        return f"alpha = {alpha:.4g} matched to N = {exponent:g} (alpha = sqrt(2 / (4N + 2)))"
+    if source_alpha and not target_alpha and "phong_exponent" in target.values:
+        alpha = float(source.values["roughness"])
+        fitted = exponent_for_alpha(alpha)
+        target.values["phong_exponent"] = n = _clamped(target, "phong_exponent", fitted)
+        clamp = "" if n == fitted else f" (exactly {fitted:.4g}, clamped)"
+        return f"N = {n:.4g} matched to alpha = {alpha:g}{clamp} (alpha = sqrt(2 / (4N + 2)))"
     return None

@@ -29,7 +29,7 @@ with the screen-space LOD): α → 0 is the mirror. A material's α between two
 levels blends them (what ``textureLod`` would do on one chain; α is one value per
 draw here, so the two levels are two textures, and OpenGL 3.3 suffices).
 
-``samples`` > 0 replaces L_pre and A, B by per-pixel importance sampling of the
+``lobe_samples`` > 0 replaces L_pre and A, B by per-pixel importance sampling of the
 same GGX lobe in the shader (the "no prefiltering" limit: the true view-dependent
 lobe, FIS from the environment's mip chain), with the same compensation c.
 """
@@ -104,7 +104,7 @@ class SplitSumMethod(Method):
             "scattering, the reference's model.",
         ),
         Parameter(
-            "samples",
+            "lobe_samples",
             "int",
             0,
             0,
@@ -151,7 +151,7 @@ class SplitSumMethod(Method):
     def render(self, frame: FrameInputs) -> None:
         static = frame.scene.static_environment(frame.timer)
         self._irradiance.update_static(frame, self.values, "splitsum")
-        sampled = int(self.values["samples"]) > 0
+        sampled = int(self.values["lobe_samples"]) > 0
         if not sampled:
             self._update_chain(frame, static)
         if self._dfg is None:
@@ -165,7 +165,7 @@ class SplitSumMethod(Method):
             static.cube.use(location=0)
             n = static.cube.size[0]
             set_uniform(program, "u_environment", 0)
-            set_uniform(program, "u_samples", int(self.values["samples"]))
+            set_uniform(program, "u_samples", int(self.values["lobe_samples"]))
             set_uniform(program, "u_source_max", float(n.bit_length() - 1))
             set_uniform(program, "u_texel_log2", math.log2(2.0 / n))
         else:
