@@ -9,12 +9,12 @@ from envstudio.core import cubemap
 from envstudio.core.sh import irradiance_sh9
 from envstudio.core.sh_lights import DiffuseProjector
 from envstudio.core.transforms import normal_matrix, rotation_xyz, translation
+from envstudio.engine import sh_irradiance
 from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.io.scene_file import load_scene
-from envstudio.methods.kautz import method as kautz
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.primitives import box, uv_sphere
@@ -218,7 +218,7 @@ def test_kautz_projects_a_read_back_cube_without_compute_shaders(room_session, m
     session, _ = room_session
     values = {"kd": 1.0, "fresnel": 0.0, "per_pixel": True, "lights": 0}
     on_gpu = render(session, "kautz", SIZE, **values)
-    monkeypatch.setattr(kautz, "has_compute", lambda ctx: False)
+    monkeypatch.setattr(sh_irradiance, "has_compute", lambda ctx: False)
     # Another threshold (unused without lights) makes kautz project again, now on the CPU.
     on_cpu = render(session, "kautz", SIZE, light_threshold=2.0, **values)
     np.testing.assert_allclose(on_cpu, on_gpu, rtol=1e-3, atol=1e-5)

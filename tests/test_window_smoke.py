@@ -319,7 +319,12 @@ def test_the_reference_in_the_window_shows_no_black_reflector_after_ten_frames(x
         session.release()
     shown_black = reflector & (view.max(axis=-1) == 0)
     assert shown_black.sum() < 1e-3 * reflector.sum()
-    wrong = np.argwhere(shown_black & ~estimate_black)
+    # on the silhouette a pixel's few footprint samples may all face away in the window's
+    # batch and not in the headless one (CI, loaded: another band split): allowed there only
+    inner = reflector.copy()
+    inner[1:-1, 1:-1] &= reflector[:-2, 1:-1] & reflector[2:, 1:-1]
+    inner[1:-1, 1:-1] &= reflector[1:-1, :-2] & reflector[1:-1, 2:]
+    wrong = np.argwhere(shown_black & ~estimate_black & inner)
     assert len(wrong) == 0, f"black in the window, not in the estimate: {wrong[:10].tolist()}"
 
 
