@@ -109,6 +109,13 @@ def psnr(test: npt.ArrayLike, reference: npt.ArrayLike, mask: npt.ArrayLike) -> 
     return float("inf") if mse == 0.0 else float(-10.0 * np.log10(mse))
 
 
+def flip(test: npt.ArrayLike, reference: npt.ArrayLike, mask: npt.ArrayLike) -> float:
+    """Mean LDR-FLIP over the masked pixels (shapes as :func:`compare_images`), alone: the
+    viewer's grid labels want it without SSIM."""
+    test, reference, mask = _checked(test, reference, mask)
+    return float(_flip_map(test, reference)[mask].mean())
+
+
 def ssim(test: npt.ArrayLike, reference: npt.ArrayLike, mask: npt.ArrayLike) -> float:
     """Mean SSIM over the masked pixels (shapes as :func:`compare_images`; module docstring)."""
     test, reference, mask = _checked(test, reference, mask)

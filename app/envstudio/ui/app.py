@@ -554,7 +554,8 @@ class Viewer(WindowConfig):
         """Every method picked, one tile each, into ``viewport`` under the shared camera,
         matched to the method on show when matching is on; then the tiles' labels."""
         grid = self.grid
-        if grid.scale.observe(frametime * 1e3):
+        # the last frame's time without the reference numbers' step (not the tiles' cost)
+        if grid.scale.observe(frametime * 1e3 - self.grid_metrics.spent_ms):
             grid.numbers.clear()
         names = grid.names(list(self.methods))
         grid.tiles = tile_layout(names, viewport, grid.scale.fraction)

@@ -39,7 +39,7 @@ import numpy as np
 import numpy.typing as npt
 from imgui_bundle import imgui
 
-from envstudio.core.metrics import MIN_SIZE, compare_images
+from envstudio.core.metrics import MIN_SIZE, flip, psnr
 from envstudio.engine.frame import FrameRenderer
 from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.grid_view import Tile, tile_at
@@ -56,7 +56,7 @@ WINDOW_FRAMES = 5
 WARM_UP_FRAMES = 5
 EMA = 0.2
 """Weight of the newest frame in each tile's shown ms per frame."""
-METRICS_INTERVAL_S = 1.0
+METRICS_INTERVAL_S = 0.5
 CLICK_POINTS = 4.0
 """A press and release closer than this (window points) is a click, not an orbit."""
 LABEL_PAD = 3.0
@@ -69,6 +69,8 @@ class TileScale:
     index: int = 0
     _times: list[float] = field(default_factory=list)
     _skip: int = WARM_UP_FRAMES
+    shown_ms: float | None = None
+    """The frame time the status line shows: every frame's, smoothed (warm-up included)."""
 
     @property
     def fraction(self) -> float:
@@ -81,7 +83,7 @@ class TileScale:
 
     @property
     def median_ms(self) -> float | None:
-        """Median of the counted frame times (None before any)."""
+        """Median of the frame times counted since the last change (None before any)."""
         return statistics.median(self._times) if self._times else None
 
     def restart(self) -> None:
@@ -91,6 +93,8 @@ class TileScale:
 
     def observe(self, frame_ms: float) -> bool:
         """Count one frame's time; returns whether the fraction changed."""
+        shown = self.shown_ms
+        self.shown_ms = frame_ms if shown is None else (1 - EMA) * shown + EMA * frame_ms
         if self._skip > 0:
             self._skip -= 1
             return False
@@ -114,9 +118,7 @@ class TileScale:
         """ "grid at 1/2 size: 180 ms" while below full size, else None."""
         if self.index == 0:
             return None
-        median = self.median_ms
-        timing = f": {median:.0f} ms" if median is not None else ""
-        return f"grid at {self.name} size{timing}"
+        return f"grid at {self.name} size: {self.shown_ms:.0f} ms"
 
 
 @dataclass
@@ -207,23 +209,31 @@ class GridState:
 
 
 class GridMetrics:
-    """PSNR and FLIP of each tile against the reference's tile, measured now and then.
+    """PSNR and FLIP of the tiles against the reference's tile, one tile at a time.
+
+    FLIP takes a few hundred milliseconds a tile on a CPU, so each step (at most
+    one every :data:`METRICS_INTERVAL_S`) measures the next tile in turn, and
+    reports the time it took so the tile fraction does not count it.
 
     Parameters
     ----------
     renderer
         The window's renderer: its context and programs draw the reflector mask.
     truth
-        The ground truth's method name (the reference).
+        The ground truth's method name (the reference); None: no numbers.
     """
 
-    def __init__(self, renderer: FrameRenderer, truth: str):
+    def __init__(self, renderer: FrameRenderer, truth: str | None):
         self.truth = truth
         self._mask_renderer = FrameRenderer(renderer.ctx, renderer.programs)
         self._last = -math.inf
+        self._next = 0
+        self.spent_ms = 0.0
+        """Milliseconds the last step took (0 when none ran this frame)."""
 
     def due(self, tiles: list[Tile]) -> bool:
         """Whether to measure this frame: the reference is a tile and the interval passed."""
+        self.spent_ms = 0.0
         return any(t.name == self.truth for t in tiles) and (
             time.monotonic() - self._last >= METRICS_INTERVAL_S
         )
@@ -236,10 +246,15 @@ class GridMetrics:
         camera: OrbitCamera,
         target: moderngl.Framebuffer,
     ) -> None:
-        """Read every tile from ``target`` (as shown) and set its PSNR and FLIP against the
-        reference tile's, for the tiles of the reference's model; call after the grid is
-        drawn and before the UI."""
+        """Measure the next tile in turn of the reference's reflectance model against the
+        reference tile, from ``target`` as shown; call after the grid is drawn, before the UI.
+        """
+        start = time.perf_counter()
+        self._step(state, methods, scene, camera, target)
         self._last = time.monotonic()
+        self.spent_ms = (time.perf_counter() - start) * 1e3
+
+    def _step(self, state, methods, scene, camera, target) -> None:
         truth_tile = next(t for t in state.tiles if t.name == self.truth)
         reference = methods[self.truth]
         model = reference.values["model"] if "model" in reference.values else None
@@ -253,22 +268,32 @@ class GridMetrics:
         if min(w, h) < MIN_SIZE:
             state.metrics_note = "tiles too small to measure"
             return
+        measured = [
+            t
+            for t in state.tiles
+            if t.name != self.truth
+            and t.viewport[2:] == (w, h)
+            and (model is None or methods[t.name].reflectance == model)
+        ]
+        for tile in state.tiles:
+            if tile not in measured:
+                numbers = state.numbers.setdefault(tile.name, TileNumbers())
+                numbers.psnr_db = numbers.flip = None
+        if not measured:
+            return
+        tile = measured[self._next % len(measured)]
+        self._next += 1
         mask = self._mask_renderer.reflector_coverage(scene, camera, (w, h))
         if not mask.any():
             state.metrics_note = "no reflector in view"
             return
-        truth_pixels = _tile_pixels(target, truth_tile)
-        for tile in state.tiles:
-            numbers = state.numbers.setdefault(tile.name, TileNumbers())
-            same_model = model is None or methods[tile.name].reflectance == model
-            if tile.name == self.truth or tile.viewport[2:] != (w, h) or not same_model:
-                numbers.psnr_db = numbers.flip = None
-                continue
-            result = compare_images(_tile_pixels(target, tile), truth_pixels, mask)
-            numbers.psnr_db, numbers.flip = result.psnr_db, result.flip
+        shown, truth = _tile_pixels(target, tile), _tile_pixels(target, truth_tile)
+        numbers = state.numbers.setdefault(tile.name, TileNumbers())
+        numbers.psnr_db, numbers.flip = psnr(shown, truth, mask), flip(shown, truth, mask)
         progress = reference.status_line()
-        state.metrics_note = f"PSNR, FLIP against the {self.truth} tile ({model} model)" + (
-            f": {progress}" if progress else ""
+        state.metrics_note = (
+            f"PSNR, FLIP against the {self.truth} tile ({model} model), one tile a "
+            f"{METRICS_INTERVAL_S:g} s in turn" + (f"; {progress}" if progress else "")
         )
 
     def release(self) -> None:
