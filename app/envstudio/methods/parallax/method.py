@@ -18,7 +18,7 @@ rather than where it would be seen from the probe (shaders/parallax/parallax.gls
   prefilter/glossiness.py (as ``kautz`` with ``lod_mode=level``), never finer than
   the pixel's footprint.
 - **Distance-based lobe correction** (Lagarde and Zanuttini's, as their course
-  notes with de Rousiers restate it, "Moving Frostbite to PBR", 2014, §4.9): the
+  notes with de Rousiers restate it, "Moving Frostbite to PBR", 2014): the
   chain was filtered about the probe, but the lobe opens at p. A lobe of angle θ
   about r covers a patch |x − p|·θ wide on the proxy, which the probe sees under
   θ·|x − p| / |x − c|; a Phong lobe is about N^−½ wide, so the lookup takes
