@@ -20,14 +20,14 @@ from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.io.images import read_image
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ["mirror", "rsibr", "hwconv", "banks", "pem", "kautz", "parallax", "reference"]
+SHIPPED = ["mirror", "rsibr", "hwconv", "banks", "pem", "kautz", "parallax", "splitsum", "reference"]
 COLOUR = (0.2, 0.6, 0.9)
 AMBIENT = 0.25
 
 
 def test_shipped_methods_come_in_the_declared_order():
     """mirror, the seeds by their papers' publication (1999, 2000 §5.2, §5.3, 2001, 2004),
-    today's engines' (2012), then the ground truth."""
+    today's engines' (2012, 2013), then the ground truth."""
     assert list(available_methods()) == SHIPPED
     assert ground_truth_class().name == "reference"
 
