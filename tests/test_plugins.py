@@ -20,7 +20,17 @@ from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.io.images import read_image
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ["mirror", "rsibr", "hwconv", "banks", "pem", "kautz", "parallax", "splitsum", "reference"]
+SHIPPED = [
+    "mirror",
+    "rsibr",
+    "hwconv",
+    "banks",
+    "pem",
+    "kautz",
+    "parallax",
+    "splitsum",
+    "reference",
+]
 COLOUR = (0.2, 0.6, 0.9)
 AMBIENT = 0.25
 
