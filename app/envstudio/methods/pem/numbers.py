@@ -4,6 +4,8 @@ Not tests (this machine is shared and noisy): a command that prints JSON::
 
     python -m envstudio.methods.pem.numbers [--views 3] [--size 256] [--em-size 64]
     python -m envstudio.methods.pem.numbers --scaling [--views 24] [--size 64] [--em-size 16]
+    python -m envstudio.methods.pem.numbers --wobble FILE.pem [--above 10]
+    python -m envstudio.methods.pem.numbers --coupling 0,0.1,1 [--tie 1e-3] [--size 128] ...
 
 - :func:`view_numbers`: for views of the default arc, each traced and inferred
   in this process (:func:`~envstudio.methods.pem.bake.bake.bake_view`, the bake's work
@@ -17,6 +19,13 @@ Not tests (this machine is shared and noisy): a command that prints JSON::
   processes; the issue's target is wall(K) ≤ 1.5 · wall(1) / K. ``view_s`` is the
   sum over views of their trace and inference seconds as the workers measured
   them: when it grows with K, the workers are competing for cores.
+- :func:`wobble_numbers`: seed 003 §6's wobble of a bake (methods/pem/offmanifold.py
+  ``wobble``: mean |Δ| per frame of the displayed reflector along a 0.25° sweep),
+  per EM model (the PTM's too where the bake has it) and for the ray trace.
+- :func:`coupling_sweep` (issue 31, coupled inference, not in seed 003): for each
+  weight γ, a small bake of the shipped arc (6 views, 2° apart), its on-manifold
+  predicted playback PSNR, its wobble, and the speckle of its coarse levels
+  (:func:`speckle`).
 """
 
 from __future__ import annotations
@@ -38,7 +47,7 @@ from envstudio.methods.pem.bake.views import arc_views
 from envstudio.methods.pem.commands import run_bake
 from envstudio.methods.pem.lookups_gl import GlLookups
 
-__all__ = ["main", "scaling", "view_numbers"]
+__all__ = ["coupling_sweep", "main", "scaling", "speckle", "view_numbers", "wobble_numbers"]
 
 
 def view_numbers(
@@ -123,6 +132,99 @@ def scaling(
     return out
 
 
+def wobble_numbers(path: str | Path, above: float = 0.0, size: int = 128) -> dict[str, float]:
+    """:func:`~envstudio.methods.pem.offmanifold.wobble` of the bake at ``path`` (its scene)."""
+    from envstudio.engine.session import RenderSession
+    from envstudio.methods.pem import offmanifold
+    from envstudio.methods.pem.bake.pem_file import load_pem
+
+    bake = load_pem(path)
+    session = RenderSession(load_scene(bake.scene), cube_size=128)
+    try:
+        method = session.method("pem")
+        method.values["pem"] = str(path)
+        method.prepare(session.gpu_scene)
+        out = offmanifold.wobble(session, method, size=size, elevation_above=above)
+    finally:
+        session.release()
+    return {k: round(v, 5) for k, v in out.items()}
+
+
+def speckle(levels: list[np.ndarray], first: int = 1) -> list[float]:
+    """Speckle of a MIP chain's levels k ≥ ``first`` with edge ≥ 4 (seed 003 Figure 5).
+
+    Per level, the mean over texels of |x − the 3 × 3 mean of x on its face| (edges
+    clamped), divided by the mean |x|: 0 for a constant face, large for isolated
+    texels that differ from their neighbours.
+
+    Parameters
+    ----------
+    levels
+        L arrays (V, P, 6, n_k, n_k, C).
+    """
+    out = []
+    for level in levels[first:]:
+        a = np.asarray(level, np.float64)
+        if a.shape[3] < 4:
+            break
+        pad = np.pad(a, [(0, 0)] * 3 + [(1, 1), (1, 1), (0, 0)], mode="edge")
+        n = a.shape[3]
+        blur = sum(pad[..., i : i + n, j : j + n, :] for i in range(3) for j in range(3)) / 9.0
+        out.append(round(float(np.abs(a - blur).mean() / max(np.abs(a).mean(), 1e-12)), 4))
+    return out
+
+
+def coupling_sweep(
+    weights: tuple[float, ...],
+    size: int = 128,
+    em_size: int = 32,
+    views: int = 6,
+    step: float = 2.0,
+    tie: float = 1e-3,
+    passes: int = 2,
+) -> list[dict]:
+    """Per coupling weight γ: on-manifold PSNR, wobble and coarse-level speckle (module docstring).
+
+    Each bake is the shipped arc (``views`` views ``step``° apart from the scene camera)
+    at a small size, without the PTM; the wobble sweep is played at the bake's size.
+    The decimated row is the speckle of the box-decimated finest level of the γ = 0 bake
+    (what a filtered chain would show).
+    """
+    from envstudio.methods.pem.bake.mip import decimated_chain
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for weight in weights:
+            path = Path(tmp) / f"g{weight:g}.pem"
+            start = time.perf_counter()
+            report = run_bake(
+                "room", lambda c: arc_views(c, views, step), path, size=size, em_size=em_size,
+                tie=tie, ptm=False, coupling=weight, coupling_passes=passes,
+            )  # fmt: skip
+            seconds = time.perf_counter() - start
+            bake = report.bake
+            motion = wobble_numbers(path, size=size)
+            row = {
+                "coupling": weight,
+                "tie": tie,
+                "bake_s": round(seconds, 1),
+                **{f"psnr_{n}": round(float(np.mean(bake.playback_psnr[n])), 2)
+                   for n in ("layered", "sphere")},
+                **{f"wobble_{n}": motion[n] for n in ("layered", "sphere", "static", "trace")},
+                "speckle_distant": speckle(bake.maps["distant"]),
+                "speckle_local_alpha": speckle([lv[..., 3:] for lv in bake.maps["local"]]),
+            }  # fmt: skip
+            if weight == weights[0]:
+                faces_first = np.moveaxis(bake.maps["distant"][0], (0, 1), (-3, -2))
+                chain = decimated_chain(faces_first)  # (6, n_k, n_k, V, P, C) per level
+                row["speckle_distant_decimated"] = speckle(
+                    [np.moveaxis(c, (-3, -2), (0, 1)) for c in chain]
+                )
+            out.append(row)
+            print(json.dumps(row), flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print :func:`view_numbers` (or :func:`scaling` with ``--scaling``) as JSON."""
     parser = argparse.ArgumentParser(prog="python -m envstudio.methods.pem.numbers")
@@ -132,8 +234,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int, default=4)
     parser.add_argument("--em-size", type=int)
     parser.add_argument("--scaling", action="store_true", help="LocalCluster K = 1 and 2")
+    parser.add_argument("--wobble", metavar="FILE", help="the wobble of a .pem bake")
+    parser.add_argument("--above", type=float, default=0.0, help="wobble: degrees above the arc")
+    parser.add_argument("--coupling", metavar="G,G,...", help="coupling weights to sweep")
+    parser.add_argument("--tie", type=float, default=1e-3, help="coupling sweep: μ")
+    parser.add_argument("--passes", type=int, default=2, help="coupling sweep: coupled passes")
     args = parser.parse_args(argv)
-    if args.scaling:
+    if args.wobble:
+        rows = wobble_numbers(args.wobble, args.above, args.size or 128)
+    elif args.coupling:
+        weights = tuple(float(w) for w in args.coupling.split(","))
+        rows = coupling_sweep(
+            weights, args.size or 128, args.em_size or 32, args.views or 6, 2.0, args.tie,
+            args.passes,
+        )  # fmt: skip
+    elif args.scaling:
         rows = scaling(
             args.scene, args.views or 24, args.size or 64, args.samples, args.em_size or 16
         )
