@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from envstudio.cli import main
-from envstudio.errors import InputFileError
+from envstudio.errors import InputFileError, ParameterError
 from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.methods.pem.bake import SceneTracer
 from envstudio.methods.pem.bake import bake as bake_module
@@ -186,7 +186,7 @@ def test_local_dask_cluster_bakes_the_same_file(baked, tmp_path):
 
 def test_a_scheduler_that_does_not_answer_is_one_line(tmp_path, capsys, monkeypatch):
     out = tmp_path / "far.pem"
-    with pytest.raises(ValueError, match="no Dask scheduler answered within 1 s") as info:
+    with pytest.raises(ParameterError, match="no Dask scheduler answered within 1 s") as info:
         run_bake("room", _arc(2), out, scheduler="tcp://127.0.0.1:9", connect_timeout=1, **TINY)
     assert "\n" not in str(info.value) and not any(tmp_path.iterdir())
     monkeypatch.setattr(bake_module, "DASK_CONNECT_TIMEOUT", 1.0)

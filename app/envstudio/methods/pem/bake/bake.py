@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from envstudio.io.atomic import atomic_path, check_output_path
+from envstudio.io.cluster import dask_client
 from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
 from envstudio.methods.pem.bake.infer import distant_box, local_ellipsoid
@@ -430,36 +431,6 @@ def _map_local(tasks, workers: int):
     pool.shutdown(wait=True)
 
 
-def _dask_client(scheduler: str, timeout: float, workers: int = 2):
-    """(client, cluster or None): a new LocalCluster for ``"local"``, else the scheduler's.
-
-    Raises
-    ------
-    ValueError
-        One line: distributed is not installed, or no scheduler answered at the
-        address within ``timeout`` seconds.
-    """
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError:  # pragma: no cover - the cluster extra is in the lock
-        raise ValueError(
-            "a Dask bake needs dask and distributed: pip install 'envmap-studio[cluster]'"
-        ) from None
-    if scheduler == "local":
-        # worker processes start with spawn (distributed's default): no fork after Embree
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
-        return Client(cluster), cluster
-    try:
-        return Client(scheduler, timeout=timeout), None
-    except (OSError, TimeoutError, ValueError) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(
-            f"--scheduler {scheduler}: no Dask scheduler answered within {timeout:g} s ({reason})"
-        ) from None
-
-
 def _map_dask(tasks, client):
     """Yield (task, result) as views finish on a Dask cluster."""
     from dask.distributed import as_completed
@@ -523,7 +494,7 @@ def run_bake(
         a ``LocalCluster`` (two worker processes, one thread each) and close it
         after. One future per unfinished view; parts are saved as they complete.
         An address that does not answer within ``connect_timeout`` seconds
-        (default :data:`DASK_CONNECT_TIMEOUT`) raises a one-line ValueError before
+        (default :data:`DASK_CONNECT_TIMEOUT`) raises a one-line ParameterError before
         anything is written.
     tie
         μ, the coarse-to-fine MIP ties (default: ``smoothness``).
@@ -694,7 +665,7 @@ def _run_pass(
     client = cluster = None
     if scheduler is not None and todo:  # before anything is written: it may not answer
         timeout = DASK_CONNECT_TIMEOUT if connect_timeout is None else float(connect_timeout)
-        client, cluster = _dask_client(scheduler, timeout, dask_workers)
+        client, cluster = dask_client(scheduler, timeout, dask_workers)
     try:
         folder.mkdir(exist_ok=True)
         if bar is not None:
