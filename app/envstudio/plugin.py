@@ -19,6 +19,7 @@ module and register the same way (its ``pyproject.toml``); the walk-through is
 """
 
 from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.core.presets import FRESNEL_PRESETS, fresnel_parameter, kd_parameter
 from envstudio.engine.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
 from envstudio.engine.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
 from envstudio.engine.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
@@ -36,6 +37,7 @@ from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
 
 __all__ = [
     "EQ8_PARAMETERS",
+    "FRESNEL_PRESETS",
     "Bake",
     "BenchTable",
     "Command",
@@ -60,6 +62,8 @@ __all__ = [
     "ShaderCompileError",
     "StaticEnvironment",
     "UserError",
+    "fresnel_parameter",
+    "kd_parameter",
     "read_shader",
     "set_eq8_uniforms",
     "set_uniform",

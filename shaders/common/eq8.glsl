@@ -8,14 +8,15 @@
 // vertex stage writes the world-space varyings (common/mesh_world.glsl).
 
 uniform vec3 u_camera_position;
-uniform float u_fresnel;
-uniform float u_kd;
+uniform vec3 u_fresnel;  // f_lambda per RGB channel
+uniform vec3 u_kd;
 in vec3 v_world_position;
 in vec3 v_world_normal;
 
 #include "common/reflection.glsl"
 
 // Eq. 8 from the diffuse radiance E(n)/pi of a white surface and the glossy radiance along r.
-vec3 eq8_shade(vec3 n, vec3 r, vec3 diffuse, vec3 glossy, float kd, float f0) {
+// F, k_d and f0 per RGB channel.
+vec3 eq8_shade(vec3 n, vec3 r, vec3 diffuse, vec3 glossy, vec3 kd, vec3 f0) {
     return mix(kd * diffuse, glossy, schlick_fresnel(f0, dot(r, n)));
 }

@@ -4,7 +4,7 @@
 //                           (common/sh_irradiance.glsl); L_diffuse = k_d / pi * E(n)
 //   glossy   (section 4.2)  the cube map's box-filtered mip chain looked up with the
 //                           reflection vector and LOD bias b: texture(cube, r, b)
-//   Fresnel  (section 5.2)  Schlick with the single parameter f_lambda
+//   Fresnel  (section 5.2)  Schlick with the single parameter f_lambda, per RGB channel
 //   combined (eq. 8)        L_o = (1 - F) L_diffuse + F L_glossy
 // Without PER_PIXEL the diffuse term and F are evaluated per vertex (as the paper
 // does) and interpolated; with it, per fragment. The reflection vector of the glossy
@@ -16,7 +16,7 @@
 #include "common/fresnel.glsl"
 #include "common/sh_irradiance.glsl"
 uniform vec3 u_camera_position;
-uniform float u_fresnel;
+uniform vec3 u_fresnel;
 
 #if defined VERTEX_SHADER
 #include "common/mesh_world.glsl"
@@ -24,7 +24,7 @@ uniform mat4 u_view;
 uniform mat4 u_projection;
 #if !PER_PIXEL
 out vec3 v_irradiance;
-out float v_fresnel;
+out vec3 v_fresnel;
 #endif
 
 void main() {
@@ -44,12 +44,12 @@ void main() {
 #elif defined FRAGMENT_SHADER
 uniform samplerCube u_environment;
 uniform float u_lod_bias;
-uniform float u_kd;
+uniform vec3 u_kd;
 in vec3 v_world_position;
 in vec3 v_world_normal;
 #if !PER_PIXEL
 in vec3 v_irradiance;
-in float v_fresnel;
+in vec3 v_fresnel;
 #endif
 out vec4 f_color;
 
@@ -73,10 +73,10 @@ void main() {
 #endif
 #if PER_PIXEL
     vec3 irradiance = sh_irradiance(n);
-    float F = schlick_fresnel(u_fresnel, dot(r, n));
+    vec3 F = schlick_fresnel(u_fresnel, dot(r, n));
 #else
     vec3 irradiance = v_irradiance;
-    float F = v_fresnel;
+    vec3 F = v_fresnel;
 #endif
     f_color = vec4(mix(u_kd / PI * irradiance, glossy, F), 1.0);
 }

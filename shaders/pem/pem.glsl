@@ -97,8 +97,8 @@ uniform bool u_use_distant;
 uniform bool u_use_local;
 uniform bool u_use_fresnel;
 uniform bool u_use_diffuse;
-uniform float u_fresnel;
-uniform float u_kd;
+uniform vec3 u_fresnel;  // f_lambda per RGB channel
+uniform vec3 u_kd;
 uniform float u_lod_bias;      // the bake's parameters["lod_bias"] (+ the lod_scale offset)
 uniform vec3 u_sh9[9];
 out vec4 f_color;
@@ -171,11 +171,11 @@ void main() {
     }
     // the diffuse layer (1 - F) d and the Fresnel modulation layer F (Figure 4);
     // the Fresnel switch drops the modulation only
-    float fresnel = schlick_fresnel(u_fresnel, dot(r, n));
+    vec3 fresnel = schlick_fresnel(u_fresnel, dot(r, n));
     vec3 diffuse = u_use_diffuse
         ? (1.0 - fresnel) * u_kd / 3.14159265358979 * max(sh9_irradiance(u_sh9, n), vec3(0.0))
         : vec3(0.0);
-    f_color = vec4(diffuse + (u_use_fresnel ? fresnel : 1.0) * incident, 1.0);
+    f_color = vec4(diffuse + (u_use_fresnel ? fresnel : vec3(1.0)) * incident, 1.0);
 #endif
 }
 #endif

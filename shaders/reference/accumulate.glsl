@@ -4,6 +4,8 @@
 // 1995) of the exitant radiance of seed 000 eq. 1 per reflector pixel, drawn
 // by randomised QMC (sample2 below).
 //
+// k_d and f_lambda are linear RGB (material.glsl): F, and each sample's weight, per channel;
+// the directions drawn do not depend on them.
 // Model 0 (seed 000 eq. 8): L_o = (1 - F) k_d D + F P with Schlick F(n.v)
 //   D = 1/pi  int L(l) max(n.l, 0) dl         (eq. 3-4: cosine lobe + environment sampling)
 //   P = (N+1)/2pi int L(l) max(r.l, 0)^N dl   (eq. 7: Phong lobe + environment sampling)
@@ -92,25 +94,25 @@ float balance(float a, float b) { return a / max(a + b, 1e-30); }
 // with their weights, then one loop that traces them (a single call site of
 // incident(), so the traversal is compiled once).
 // The MIS pair for D (seed 000 eq. 3-4) of models 0 and 2: directions[0..1], weights[0..1].
-void sample_diffuse(vec3 n, uvec2 pixel, uint index, float diffuse_weight,
-                    inout vec3 directions[4], inout float weights[4]) {
+void sample_diffuse(vec3 n, uvec2 pixel, uint index, vec3 diffuse_weight,
+                    inout vec3 directions[4], inout vec3 weights[4]) {
     // cosine-lobe sample for D (pdf = f)
     directions[0] = sample_cosine(n, sample2(pixel, 0u, index));
     float pdf = max(dot(n, directions[0]), 0.0) / PI;
-    weights[0] = pdf > 0.0 ? diffuse_weight * balance(pdf, env_pdf(directions[0])) : 0.0;
+    weights[0] = pdf > 0.0 ? diffuse_weight * balance(pdf, env_pdf(directions[0])) : vec3(0.0);
     // environment sample for D
     directions[1] = sample_environment(sample2(pixel, 1u, index));
     pdf = env_pdf(directions[1]);
     float f = max(dot(n, directions[1]), 0.0) / PI;
-    weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : 0.0;
+    weights[1] = f > 0.0 ? diffuse_weight * balance(pdf, f) * f / pdf : vec3(0.0);
 }
 
 vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     float N = u_phong_exponent;
-    float F = schlick_fresnel(u_fresnel, dot(n, v));
-    float diffuse_weight = (1.0 - F) * u_kd;
+    vec3 F = schlick_fresnel(u_fresnel, dot(n, v));
+    vec3 diffuse_weight = (1.0 - F) * u_kd;
     vec3 directions[4];
-    float weights[4];
+    vec3 weights[4];
     sample_diffuse(n, pixel, index, diffuse_weight, directions, weights);
     float pdf;
     float f;
@@ -124,13 +126,15 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
     directions[3] = cone ? sample_cone(g_environment) : sample_environment(g_environment);
     pdf = cone ? cone_pdf(directions[3]) : env_pdf(directions[3]);
     f = phong_lobe(r, directions[3], N);
-    weights[3] = f > 0.0 && pdf > 0.0 ? F * balance(pdf, f) * f / pdf : 0.0;
+    weights[3] = f > 0.0 && pdf > 0.0 ? F * balance(pdf, f) * f / pdf : vec3(0.0);
     float lobe_pdf = phong_lobe(r, directions[2], N);
     float other = cone ? cone_pdf(directions[2]) : env_pdf(directions[2]);
-    weights[2] = lobe_pdf > 0.0 ? F * balance(lobe_pdf, other) : 0.0;
+    weights[2] = lobe_pdf > 0.0 ? F * balance(lobe_pdf, other) : vec3(0.0);
     vec3 total = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
-        if (weights[k] > 0.0) total += weights[k] * incident(p, n, directions[k]);
+        if (any(greaterThan(weights[k], vec3(0.0)))) {
+            total += weights[k] * incident(p, n, directions[k]);
+        }
     }
     return total;
 }
@@ -139,13 +143,13 @@ vec3 sample_eq8(vec3 p, vec3 n, vec3 v, vec3 r, uvec2 pixel, uint index) {
 vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
     float alpha = microfacet_alpha();
     float n_dot_v = max(dot(n, v), 1e-4);
-    float F_view = schlick_fresnel(u_fresnel, n_dot_v);
+    vec3 F_view = schlick_fresnel(u_fresnel, n_dot_v);
     // Without a diffuse term, environment samples come from the cap about the
     // mirror direction where D(h) is above LOBE_CAP_FLOOR of its peak
     // (tan(theta_h) = alpha sqrt(1 / sqrt(floor) - 1), theta_l ~ 2 theta_h);
     // the GGX samples cover the rest, as for the Phong lobe.
     float cap = min(2.0 * atan(alpha * sqrt(1.0 / sqrt(LOBE_CAP_FLOOR) - 1.0)), 0.5 * PI);
-    bool cone = u_environment_sampling == 1 && u_kd == 0.0
+    bool cone = u_environment_sampling == 1 && all(equal(u_kd, vec3(0.0)))
                 && setup_cone(reflect(-v, n), cos(cap));
     vec3 result = vec3(0.0);
     for (int technique = 0; technique < 2; ++technique) {
@@ -165,10 +169,10 @@ vec3 sample_microfacet(vec3 p, vec3 n, vec3 v, uvec2 pixel, uint index) {
         float D = ggx_d(n_dot_h, alpha);
         float pdf_brdf = D * n_dot_h / (4.0 * v_dot_h);
         float pdf_env = cone ? cone_pdf(l) : env_pdf(l);
-        float specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
-                         / (4.0 * n_dot_l * n_dot_v);
-        float diffuse = u_kd / PI * (1.0 - F_view);
-        float f = (specular + diffuse) * n_dot_l;
+        vec3 specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
+                        / (4.0 * n_dot_l * n_dot_v);
+        vec3 diffuse = u_kd / PI * (1.0 - F_view);
+        vec3 f = (specular + diffuse) * n_dot_l;
         float pdf = technique == 0 ? pdf_brdf : pdf_env;
         float other = technique == 0 ? pdf_env : pdf_brdf;
         // Balance weights sum to 1 wherever either pdf is positive: with a diffuse term
@@ -197,14 +201,14 @@ float banks_band_pdf(vec3 t, vec3 l, float theta0, float theta1) {
 // directions see the environment from any side of the surface (method banks'
 // map: "an object using this environment map does reflect light from behind it").
 vec3 sample_banks(vec3 p, vec3 n, vec3 t, vec3 v, uvec2 pixel, uint index) {
-    float F = schlick_fresnel(u_fresnel, dot(n, v));
+    vec3 F = schlick_fresnel(u_fresnel, dot(n, v));
     vec3 directions[4];
-    float weights[4];
+    vec3 weights[4];
     sample_diffuse(n, pixel, index, (1.0 - F) * u_kd, directions, weights);
     float b = dot(v, t);
     float theta0, theta1, psi;
     banks_band(b, theta0, theta1, psi);
-    float scale = F / (u_banks_normalize ? banks_integral(b) : 1.0);
+    vec3 scale = F / (u_banks_normalize ? banks_integral(b) : 1.0);
     vec3 e1 = normalize(abs(t.x) < 0.9 ? cross(t, vec3(1.0, 0.0, 0.0)) : cross(t, vec3(0.0, 1.0, 0.0)));
     vec3 e2 = cross(t, e1);
     float theta = mix(theta0, theta1, g_lobe.x);
@@ -219,11 +223,11 @@ vec3 sample_banks(vec3 p, vec3 n, vec3 t, vec3 v, uvec2 pixel, uint index) {
         float env = env_pdf(l);
         float pdf = k == 2 ? lobe_pdf : env;
         weights[k] = f > 0.0 && pdf > 0.0
-                     ? scale * f / pdf * balance(pdf, k == 2 ? env : lobe_pdf) : 0.0;
+                     ? scale * f / pdf * balance(pdf, k == 2 ? env : lobe_pdf) : vec3(0.0);
     }
     vec3 total = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
-        if (weights[k] <= 0.0) continue;
+        if (all(lessThanEqual(weights[k], vec3(0.0)))) continue;
         vec3 l = directions[k];
         bool unshadowed = k >= 2 && !u_self_shadowing;
         total += weights[k] * (unshadowed ? environment_radiance(l) : incident(p, n, l));

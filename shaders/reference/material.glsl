@@ -5,9 +5,10 @@
 //   model 1 (microfacet): k_d / pi (1 - F(n.v)) (n.l) + GGX D G2 F(v.h) / (4 n.v);
 //   model 2 (banks): a traced path that meets a reflector again ends there (black):
 //   the tracer does not carry the tangent field; compare banks with trace=false.
+// k_d and f_lambda are linear RGB: F is Schlick's per channel, and so is every weight.
 uniform int u_brdf_model;
-uniform float u_kd;
-uniform float u_fresnel;
+uniform vec3 u_kd;
+uniform vec3 u_fresnel;
 uniform float u_phong_exponent;
 
 // Beyond this Phong exponent the lobe is narrower than any environment texel
@@ -17,45 +18,55 @@ const float MIRROR_EXPONENT = 1e5;
 // GGX roughness of a Phong exponent N (a Phong exponent N is about a Blinn exponent 4N).
 float microfacet_alpha() { return sqrt(2.0 / (4.0 * u_phong_exponent + 2.0)); }
 
+// The mean of an RGB weight: what a choice between lobes is made in proportion to.
+float channel_mean(vec3 c) { return (c.r + c.g + c.b) / 3.0; }
+
 // Continue a path that arrived along `direction` at a reflector with unit
 // normal n (facing the arrival): a new direction drawn from the BRDF times the
-// cosine (model 0: in proportion to it exactly, so the weight is the albedo
-// (1 - F) k_d + F; model 1: the mixture of the cosine and GGX half-vector
-// densities), and `weight` = f (n.l) / pdf. xi: three numbers in [0, 1).
-vec3 sample_reflector(vec3 direction, vec3 n, vec3 xi, out float weight) {
+// cosine (model 0: a lobe picked in proportion to the mean over the channels of its
+// albedo, (1 - F) k_d or F, then drawn exactly, so the weight is that lobe's RGB albedo
+// over the pick's probability, the albedo (1 - F) k_d + F for a grey material; model 1:
+// the mixture of the cosine and GGX half-vector densities), and `weight` = f (n.l) / pdf,
+// per RGB channel. xi: three numbers in [0, 1).
+vec3 sample_reflector(vec3 direction, vec3 n, vec3 xi, out vec3 weight) {
     vec3 v = -direction;
     float n_dot_v = max(dot(n, v), 1e-4);
-    float F = schlick_fresnel(u_fresnel, n_dot_v);
-    float diffuse = (1.0 - F) * u_kd;
+    vec3 F = schlick_fresnel(u_fresnel, n_dot_v);
+    vec3 diffuse = (1.0 - F) * u_kd;
+    float diffuse_mean = channel_mean(diffuse);
+    float specular_mean = channel_mean(F);
     if (u_brdf_model == 2) {
-        weight = 0.0;
+        weight = vec3(0.0);
         return n;
     }
     if (u_brdf_model == 0) {
-        float specular = F;
-        weight = diffuse + specular;
-        if (weight <= 0.0) return n;
-        float p_diffuse = diffuse / weight;
+        weight = vec3(0.0);
+        if (diffuse_mean + specular_mean <= 0.0) return n;
+        float p_diffuse = diffuse_mean / (diffuse_mean + specular_mean);
         vec3 r = reflect(direction, n);
-        if (xi.z < p_diffuse) return sample_cosine(n, xi.xy);
+        if (xi.z < p_diffuse) {
+            weight = diffuse / p_diffuse;
+            return sample_cosine(n, xi.xy);
+        }
+        weight = F / (1.0 - p_diffuse);
         return u_phong_exponent >= MIRROR_EXPONENT ? r : sample_phong(r, u_phong_exponent, xi.xy);
     }
     float alpha = microfacet_alpha();
     // pick the diffuse lobe in proportion to its albedo against the Fresnel-weighted GGX lobe
-    float p_diffuse = diffuse / max(diffuse + F, 1e-6);
+    float p_diffuse = diffuse_mean / max(diffuse_mean + specular_mean, 1e-6);
     vec3 l = xi.z < p_diffuse ? sample_cosine(n, xi.xy) : reflect(direction, sample_ggx_half(n, alpha, xi.xy));
     float n_dot_l = dot(n, l);
     if (n_dot_l <= 0.0) {
-        weight = 0.0;
+        weight = vec3(0.0);
         return l;
     }
     vec3 h = normalize(l + v);
     float n_dot_h = max(dot(n, h), 0.0);
     float v_dot_h = max(dot(v, h), 1e-4);
     float D = ggx_d(n_dot_h, alpha);
-    float specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
-                     / (4.0 * n_dot_v);
+    vec3 specular = D * ggx_g2(n_dot_l, n_dot_v, alpha) * schlick_fresnel(u_fresnel, v_dot_h)
+                    / (4.0 * n_dot_v);
     float pdf = p_diffuse * n_dot_l / PI + (1.0 - p_diffuse) * D * n_dot_h / (4.0 * v_dot_h);
-    weight = pdf > 0.0 ? (specular + u_kd / PI * (1.0 - F) * n_dot_l) / pdf : 0.0;
+    weight = pdf > 0.0 ? (specular + u_kd / PI * (1.0 - F) * n_dot_l) / pdf : vec3(0.0);
     return l;
 }

@@ -40,7 +40,7 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
     if (dot(n, l) <= 0.0 || dot(g_path_face, l) <= 0.0) return vec3(0.0);
     vec3 origin = p + n * u_ray_offset;
     vec3 direction = l;
-    float throughput = 1.0;
+    vec3 throughput = vec3(1.0);
     for (int bounce = 0; bounce < u_trace_bounces; ++bounce) {
         float t;
         int tri;
@@ -61,10 +61,11 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
             hit_normal = -hit_normal;
         }
         if (dot(hit_normal, direction) >= 0.0) return vec3(0.0);
-        float weight;
+        vec3 weight;
         vec3 next = sample_reflector(direction, hit_normal, path_random3(), weight);
         // the surface blocks what the lobe reaches below it, as at the first hit
-        if (weight <= 0.0 || dot(next, hit_normal) <= 0.0 || dot(next, face) <= 0.0) {
+        bool none = all(lessThanEqual(weight, vec3(0.0)));
+        if (none || dot(next, hit_normal) <= 0.0 || dot(next, face) <= 0.0) {
             return vec3(0.0);
         }
         throughput *= weight;

@@ -8,6 +8,7 @@ Shared names (DESIGN.md): ``lod_bias`` (b), ``fresnel`` (f_λ),
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import asdict, dataclass
 
@@ -27,7 +28,7 @@ class Parameter:
     kind : str
         ``float``, ``int``, ``bool``, ``choice``, ``path`` (a file name; the
         method checks the file when it uses it) or ``color`` (linear RGB, three
-        floats; ``--param name=r,g,b``).
+        floats; ``--param name=r,g,b``, one number for grey, or a preset's name).
     default : float | int | bool | str | tuple of float
         Value a fresh method starts with.
     minimum, maximum : float or None
@@ -43,6 +44,9 @@ class Parameter:
         Logarithmic slider (exponents).
     rebuild : bool
         Changing it needs a program rebuild (a mode switch), not only a uniform.
+    presets : dict or tuple
+        A ``color``'s named values: name → (r, g, b), stored as a tuple of pairs
+        (``fresnel``'s are core/presets.py's f_λ of metals and dielectrics).
     applies_when : dict or tuple
         When it matters: another parameter's name → the choices under which it does
         (``{"model": ("banks",)}``), stored as a tuple of pairs. Empty: always. The panel
@@ -60,8 +64,12 @@ class Parameter:
     log: bool = False
     rebuild: bool = False
     applies_when: Mapping[str, str | tuple[str, ...]] | tuple = ()
+    presets: Mapping[str, tuple[float, float, float]] | tuple = ()
 
     def __post_init__(self):
+        if isinstance(self.presets, Mapping):
+            pairs = tuple((name, tuple(rgb)) for name, rgb in self.presets.items())
+            object.__setattr__(self, "presets", pairs)
         conditions = self.applies_when
         if isinstance(conditions, Mapping):
             pairs = tuple(
@@ -111,17 +119,27 @@ class Parameter:
         return number
 
     def _color(self, value: object) -> tuple[float, float, float]:
-        """``r,g,b`` (text) or three numbers, each finite and inside the range."""
+        """``r,g,b``, one number (grey), a preset's name, or three numbers; each finite and
+        inside the range."""
+        presets = dict(self.presets)
+        if isinstance(value, str) and value.strip().lower() in presets:
+            return presets[value.strip().lower()]
         parts = value.split(",") if isinstance(value, str) else value
+        if isinstance(parts, numbers.Real) and not isinstance(parts, bool):
+            parts = (parts,)
         try:
             rgb = tuple(float(c) for c in parts)
         except (TypeError, ValueError):
             rgb = ()
+        if len(rgb) == 1:
+            rgb = rgb * 3
         low = -float("inf") if self.minimum is None else self.minimum
         high = float("inf") if self.maximum is None else self.maximum
         if len(rgb) != 3 or not all(low <= c <= high and abs(c) != float("inf") for c in rgb):
+            named = f", or one of {', '.join(presets)}" if presets else ""
             raise ParameterError(
-                f"{self.name}={value}: expected r,g,b: three numbers in [{low:g}, {high:g}]"
+                f"{self.name}={value}: expected r,g,b or one number (grey), each in "
+                f"[{low:g}, {high:g}]{named}"
             )
         return rgb
 
@@ -140,6 +158,7 @@ class Parameter:
         """JSON-ready description (a colour's default as a list)."""
         described = asdict(self)
         described["applies_when"] = {name: list(allowed) for name, allowed in self.applies_when}
+        described["presets"] = {name: list(rgb) for name, rgb in self.presets}
         if self.kind == "color":
             described["default"] = list(self.default)
         return {k: v for k, v in described.items() if k == "default" or v not in (None, (), "", {})}

@@ -33,7 +33,7 @@ def material_values(scene: Scene) -> dict[str, float | str]:
     material = reflectors[0].material
     model = {} if material.model is None else {"model": material.model}
     return model | {
-        "kd": float(np.mean(material.kd)),
+        "kd": tuple(material.kd),
         "fresnel": material.fresnel,
         "phong_exponent": material.phong_exponent,
         "sharpness": material.sharpness,

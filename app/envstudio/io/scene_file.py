@@ -27,8 +27,8 @@ Example::
     subdivide = 2                    # optional: Loop subdivision steps (4x triangles each)
     color = [0.8, 0.2, 0.2]          # albedo of a local object
     [object.material]
-    kd = [0.0, 0.0, 0.0]
-    fresnel = 1.0
+    kd = [0.0, 0.0, 0.0]             # or one number (grey)
+    fresnel = 1.0                    # f_λ: one number, [r, g, b] or a preset ("gold", ...)
     phong_exponent = 200.0
     sharpness = 0.9                  # Banks s in [0, 1) (seed 004 §5.3)
     tangent_field = "axis"           # axis | direction | radial | uv (scene/tangents.py)
@@ -53,6 +53,7 @@ from typing import Annotated, Literal
 import msgspec
 import tomllib
 
+from envstudio.core.presets import FRESNEL_RGB
 from envstudio.errors import InputFileError
 from envstudio.io.images import read_environment
 from envstudio.io.meshes import load_mesh
@@ -80,6 +81,7 @@ Colour = tuple[Unit, Unit, Unit]
 # kd's union names its three components as a list: msgspec 0.23 crashes at exit with a
 # union of an Annotated float and a tuple of them.
 ColourList = Annotated[list[Unit], msgspec.Meta(min_length=3, max_length=3)]
+PresetName = Annotated[str, msgspec.Meta(description="an f_λ preset: " + ", ".join(FRESNEL_RGB))]
 Sharpness = Annotated[
     float,
     msgspec.Meta(
@@ -108,7 +110,7 @@ class MaterialSpec(msgspec.Struct, forbid_unknown_fields=True):
     """``[object.material]``: eq. 8's k_d and f_λ, Phong N, Banks keys, the reference's model."""
 
     kd: Unit | ColourList = 0.0
-    fresnel: Unit = 1.0
+    fresnel: Unit | ColourList | PresetName = 1.0  # a name: core/presets.py's f_λ
     phong_exponent: Positive = 200.0
     sharpness: Sharpness = 0.9
     tangent_field: Literal[FIELDS] = "axis"  # type: ignore[valid-type]
@@ -392,7 +394,7 @@ class _SceneReader:
         kd = (mat.kd,) * 3 if isinstance(mat.kd, float) else tuple(mat.kd)
         material = Material(
             kd=kd,
-            fresnel=mat.fresnel,
+            fresnel=self.fresnel(mat.fresnel, f"object[{index}].material.fresnel"),
             phong_exponent=mat.phong_exponent,
             sharpness=mat.sharpness,
             tangent_field=TangentField(mat.tangent_field, mat.tangent_axis),
@@ -401,6 +403,19 @@ class _SceneReader:
         transform = Transform(spec.translation, spec.rotation, spec.scale)
         name = spec.name or f"object{index}"
         return Node(name, mesh, material, transform, spec.role, spec.color)
+
+    def fresnel(self, value: float | list[float] | str, where: str) -> tuple[float, float, float]:
+        """f_λ as linear RGB: a grey, three numbers or a preset's name (core/presets.py)."""
+        if isinstance(value, float):
+            return (value,) * 3
+        if not isinstance(value, str):
+            return tuple(value)
+        if value.strip().lower() not in FRESNEL_RGB:
+            raise InputFileError(
+                f"{self.path}: {where} = {value!r}: expected a number in [0, 1], three of them "
+                f"or one of {', '.join(FRESNEL_RGB)}"
+            )
+        return FRESNEL_RGB[value.strip().lower()]
 
     def mesh(self, spec: ObjectSpec, where: str) -> MeshData:
         if spec.mesh is not None:

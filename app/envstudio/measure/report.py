@@ -487,6 +487,9 @@ def _matched_text(result: MethodResult) -> str:
 
 
 def _value_text(value: object) -> str:
+    """A number as ``%g``, a colour as ``--param`` takes it (``1,0.71,0.29``; a grey ``0.5``)."""
+    if isinstance(value, (tuple, list)) and value and all(isinstance(c, float) for c in value):
+        return _value_text(value[0]) if len(set(value)) == 1 else ",".join(f"{c:g}" for c in value)
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 

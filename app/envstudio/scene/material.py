@@ -15,8 +15,9 @@ class Material:
     ----------
     kd : (3,) tuple of float
         Diffuse albedo k_d in [0, 1] per RGB channel (seed 000 eq. 2).
-    fresnel : float
-        f_λ, Schlick reflectance at normal incidence in [0, 1] (seed 000 section 5.2).
+    fresnel : (3,) tuple of float
+        f_λ, Schlick reflectance at normal incidence in [0, 1] per RGB channel (seed 000
+        section 5.2: "the color of reflected white light at normal incidence").
     phong_exponent : float
         Phong lobe exponent N (seed 000 eq. 5–7).
     sharpness : float
@@ -29,7 +30,7 @@ class Material:
     """
 
     kd: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    fresnel: float = 1.0
+    fresnel: tuple[float, float, float] = (1.0, 1.0, 1.0)
     phong_exponent: float = 200.0
     sharpness: float = 0.9
     tangent_field: TangentField = field(default_factory=TangentField)

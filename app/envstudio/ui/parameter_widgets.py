@@ -12,7 +12,10 @@ declaration validates it::
     choice  combo of ``choices``
     path    a text field (applied on Enter) and an "Open..." button for a native
             file dialog offering the suffixes in ``choices``
-    color   color_edit3 (linear RGB; values past 1 for an unbounded maximum)
+    color   color_edit3 (linear RGB; values past 1 for an unbounded maximum) with a
+            scalar slider beside it that scales all three channels together (its
+            value the channels' mean; from black, a grey), and a preset combo when
+            the declaration has presets (``fresnel``'s metals and dielectrics)
 
 The unit and help text form the tooltip. A number typed past its range
 (Ctrl+click on a slider) is clamped to it and the clamp is noted in the status line.
@@ -111,23 +114,72 @@ def _widget(values: ParameterValues, param: Parameter, label: str, current) -> s
     elif param.kind == "path":
         changed, value = _path_widget(param, str(current))
     elif param.kind == "color":
-        hdr = imgui.ColorEditFlags_.hdr if param.maximum is None or param.maximum > 1 else 0
-        changed, rgb = imgui.color_edit3(
-            label, list(current), flags=hdr | imgui.ColorEditFlags_.float
-        )
-        value = tuple(float(c) for c in rgb)
+        changed, value = _color_widget(param, tuple(current))
     else:
         index = param.choices.index(current)
         changed, index = imgui.combo(label, index, list(param.choices))
         value = param.choices[index]
     text = tooltip(param)
-    if text:
+    if text and param.kind != "color":  # the colour's items have their own
         imgui.set_item_tooltip(text)
     note = None
     if changed:
         value, note = clamp_note(param, value)
         values[param.name] = value
     return note
+
+
+def scaled_color(
+    rgb: tuple[float, float, float], mean: float, maximum: float | None
+) -> tuple[float, float, float]:
+    """``rgb`` scaled so that its channels' mean becomes ``mean`` (the colour kept, each
+    channel clamped to ``maximum``); black becomes the grey ``mean``."""
+    old = sum(rgb) / 3.0
+    high = float("inf") if maximum is None else maximum
+    if old <= 0.0:
+        return (min(mean, high),) * 3
+    return tuple(min(c * mean / old, high) for c in rgb)
+
+
+def _color_widget(param: Parameter, current: tuple) -> tuple[bool, tuple[float, float, float]]:
+    """color_edit3, the scalar slider beside it and the preset combo; (changed, value)."""
+    width = imgui.calc_item_width()
+    spacing = imgui.get_style().item_inner_spacing.x
+    hdr = imgui.ColorEditFlags_.hdr if param.maximum is None or param.maximum > 1 else 0
+    imgui.push_id(param.name)
+    imgui.set_next_item_width(0.65 * width)
+    changed, rgb = imgui.color_edit3(
+        "##rgb", list(current), flags=hdr | imgui.ColorEditFlags_.float
+    )
+    value = tuple(float(c) for c in rgb)
+    text = tooltip(param)
+    if text:
+        imgui.set_item_tooltip(text)
+    imgui.same_line(0.0, spacing)
+    imgui.set_next_item_width(max(0.35 * width - spacing, 1.0))
+    mean = sum(value) / 3.0
+    low = 0.0 if param.minimum is None else float(param.minimum)
+    if param.maximum is None:
+        moved, mean = imgui.drag_float(param.name, mean, 0.01, low, 0.0, _FLOAT)
+    else:
+        moved, mean = imgui.slider_float(param.name, mean, low, float(param.maximum), _FLOAT)
+    if moved:
+        value = scaled_color(value, max(mean, low), param.maximum)
+    if text:
+        imgui.set_item_tooltip(f"All three channels together: their mean. {text}")
+    picked = False
+    if param.presets:
+        names = [name for name, _ in param.presets]
+        shown = next((name for name, rgb in param.presets if rgb == value), "custom")
+        imgui.set_next_item_width(0.65 * width)
+        if imgui.begin_combo("preset", shown):
+            for name, preset in param.presets:
+                if imgui.selectable(name, name == shown)[0]:
+                    value, picked = preset, True
+            imgui.end_combo()
+        imgui.set_item_tooltip(f"{param.name}: one of {', '.join(names)} (linear RGB)")
+    imgui.pop_id()
+    return changed or moved or picked, value
 
 
 def _path_widget(param: Parameter, current: str) -> tuple[bool, str]:

@@ -239,8 +239,8 @@ class HwConvMethod(Method):
         set_uniform(program, "u_size", float(plan.face_size))
         set_uniform(program, "u_border", float(plan.border))
         set_uniform(program, "u_camera_position", frame.camera_position)
-        set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
-        set_uniform(program, "u_kd", float(self.values["kd"]))
+        set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
+        set_uniform(program, "u_kd", tuple(self.values["kd"]))
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("hwconv"):

@@ -53,7 +53,15 @@ from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
 from envstudio.gpu.context import require_version
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.plugin import FrameInputs, Method, Parameter, ShIrradiance, sh_parameters
+from envstudio.plugin import (
+    FrameInputs,
+    Method,
+    Parameter,
+    ShIrradiance,
+    fresnel_parameter,
+    kd_parameter,
+    sh_parameters,
+)
 
 __all__ = ["STATIC_HEIGHT", "KautzMethod"]
 
@@ -87,16 +95,12 @@ class KautzMethod(Method):
             help="bias: b is added to the hardware LOD (the paper); level: b is the mip level "
             "itself, never finer than a pixel (resolution-independent, as the b-N fit assumes).",
         ),
-        Parameter(
-            "fresnel",
-            "float",
+        fresnel_parameter(
             0.26,
-            0.0,
-            1.0,
-            "f_λ",
-            "Schlick reflectance at normal incidence, weighting glossy against diffuse (eq. 8).",
+            "Schlick reflectance at normal incidence per RGB channel, weighting glossy against "
+            "diffuse (eq. 8).",
         ),
-        Parameter("kd", "float", 0.8, 0.0, 1.0, "k_d", "Diffuse albedo (eq. 12)."),
+        kd_parameter(0.8, "Diffuse albedo per RGB channel (eq. 12)."),
         Parameter(
             "per_pixel",
             "bool",
@@ -152,8 +156,8 @@ class KautzMethod(Method):
         set_uniform(program, "u_environment", 0)
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_lod_bias", float(self.values["lod_bias"]))
-        set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
-        set_uniform(program, "u_kd", float(self.values["kd"]))
+        set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
+        set_uniform(program, "u_kd", tuple(self.values["kd"]))
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("kautz"):

@@ -31,7 +31,15 @@ from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.verify import check_bake_for_scene
-from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter, ReportExtra
+from envstudio.plugin import (
+    FrameInputs,
+    GpuScene,
+    Method,
+    Parameter,
+    ReportExtra,
+    fresnel_parameter,
+    kd_parameter,
+)
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene
@@ -111,8 +119,8 @@ class PemMethod(Method):
         Parameter("fresnel_layer", "bool", True, help="Fresnel modulation of the reflection."),
         Parameter("diffuse", "bool", True, help="Diffuse layer (1 − F) k_d/π E_sh9(n)."),
         Parameter("hull", "bool", True, help="Convex-hull triangles use the distant map only."),
-        Parameter("fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick f_λ of the Fresnel layer."),
-        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo of the diffuse layer."),
+        fresnel_parameter(1.0, "Schlick f_λ of the Fresnel layer, per RGB channel."),
+        kd_parameter(0.0, "Diffuse albedo of the diffuse layer, per RGB channel."),
     )
 
     def __init__(self, ctx: moderngl.Context, programs):
@@ -274,8 +282,8 @@ class PemMethod(Method):
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         set_uniform(program, "u_sh9", frame.scene.sh9)
-        set_uniform(program, "u_fresnel", float(self.values["fresnel"]))
-        set_uniform(program, "u_kd", float(self.values["kd"]))
+        set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
+        set_uniform(program, "u_kd", tuple(self.values["kd"]))
         for name in ("distant", "local", "diffuse", "hull"):
             set_uniform(program, f"u_use_{name}", bool(self.values[name]))
         set_uniform(program, "u_use_fresnel", bool(self.values["fresnel_layer"]))

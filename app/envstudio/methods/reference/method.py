@@ -67,7 +67,14 @@ from envstudio.methods.reference.sample_allocation import (
     SampleAllocation,
 )
 from envstudio.methods.reference.tracing import TraceData
-from envstudio.plugin import FrameInputs, GpuScene, Method, Parameter
+from envstudio.plugin import (
+    FrameInputs,
+    GpuScene,
+    Method,
+    Parameter,
+    fresnel_parameter,
+    kd_parameter,
+)
 from envstudio.scene.tangents import TangentField
 
 MODELS = ("phong", "microfacet", "banks")
@@ -157,10 +164,8 @@ class ReferenceMethod(Method):
             "drops (seed 004 §5.3); off: the whole sphere, as the 3D map.",
             applies_when={"model": "banks"},
         ),
-        Parameter(
-            "fresnel", "float", 1.0, 0.0, 1.0, "f_λ", "Schlick reflectance at normal incidence."
-        ),
-        Parameter("kd", "float", 0.0, 0.0, 1.0, "k_d", "Diffuse albedo."),
+        fresnel_parameter(1.0, "Schlick reflectance at normal incidence, per RGB channel."),
+        kd_parameter(0.0, "Diffuse albedo, per RGB channel."),
         Parameter(
             "phong_exponent",
             "float",
@@ -585,7 +590,9 @@ class ReferenceMethod(Method):
         set_uniform(program, "u_viewport", np.asarray(size, np.float32))
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_brdf_model", MODELS.index(self.values["model"]))
-        for name in ("kd", "fresnel", "phong_exponent", "sharpness"):
+        for name in ("kd", "fresnel"):  # linear RGB
+            set_uniform(program, f"u_{name}", tuple(self.values[name]))
+        for name in ("phong_exponent", "sharpness"):
             set_uniform(program, f"u_{name}", float(self.values[name]))
         set_uniform(program, "u_banks_normalize", bool(self.values["normalize"]))
         set_uniform(program, "u_self_shadowing", bool(self.values["self_shadowing"]))

@@ -42,7 +42,14 @@ from envstudio.methods.rsibr.figures import figure4
 from envstudio.methods.rsibr.generator import MapGenerator
 from envstudio.methods.rsibr.gpu_bake import DEFAULT_SAMPLES
 from envstudio.methods.rsibr.map_set import MapSet
-from envstudio.plugin import FrameInputs, Method, Parameter, StaticEnvironment
+from envstudio.plugin import (
+    FrameInputs,
+    Method,
+    Parameter,
+    StaticEnvironment,
+    fresnel_parameter,
+    kd_parameter,
+)
 
 __all__ = ["RsibrMethod"]
 
@@ -73,24 +80,12 @@ class RsibrMethod(Method):
             "brdf", "choice", "phong", unit="", help="BRDF of the maps.", choices=tuple(BRDFS)
         ),
         *_BAKE_PARAMETERS.values(),
-        Parameter(
-            "fresnel",
-            "float",
-            1.0,
-            0.0,
-            1.0,
-            "f_λ",
-            "Schlick f_λ added to Phong maps.",
-            applies_when={"brdf": "phong"},
+        fresnel_parameter(
+            1.0, "Schlick f_λ added to Phong maps, per RGB channel.", applies_when={"brdf": "phong"}
         ),
-        Parameter(
-            "kd",
-            "float",
+        kd_parameter(
             0.0,
-            0.0,
-            1.0,
-            "k_d",
-            "Diffuse albedo (Phong, Lambertian).",
+            "Diffuse albedo (Phong, Lambertian), per RGB channel.",
             applies_when={"brdf": ("phong", "lambertian")},
         ),
         Parameter(
@@ -151,7 +146,7 @@ class RsibrMethod(Method):
 
     def _needs_diffuse_maps(self) -> bool:
         """Phong with k_d > 0: its diffuse term comes from Lambertian maps (seed 002 §3)."""
-        return self.values["brdf"] == "phong" and float(self.values["kd"]) > 0.0
+        return self.values["brdf"] == "phong" and max(self.values["kd"]) > 0.0
 
     def _update_bakes(self, frame: FrameInputs, static: StaticEnvironment) -> None:
         scene_key = (id(frame.scene), static.revision)
@@ -253,8 +248,8 @@ class RsibrMethod(Method):
         set_uniform(program, "u_has_diffuse_map", diffuse is not None)
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_shading", _SHADING[self.bake.brdf])
-        set_uniform(program, "u_fresnel", self.values["fresnel"])
-        set_uniform(program, "u_kd", self.values["kd"])
+        set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
+        set_uniform(program, "u_kd", tuple(self.values["kd"]))
         set_uniform(program, "u_view", frame.view)
         set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("rsibr.render"):

@@ -15,7 +15,9 @@ What a primary ray returns
 
   * diffuse  d = k_d/π · E_sh9(n), the diffuse radiance of eq. 8 of seed 000
     (unweighted by Fresnel, unshadowed, as the playback draws it);
-  * Fresnel  F = f_λ + (1 − f_λ)(1 − r·n)^5, clamped as shaders/common/fresnel.glsl;
+  * Fresnel  F = f_λ + (1 − f_λ)(1 − r·n)^5, clamped as shaders/common/fresnel.glsl, per
+    RGB channel in the radiance; the layer stored is its mean over the channels (the
+    playback applies its own f_λ, a colour);
   * distant  D: the ray along r traced through local objects only. The reflector
     parts are transparent to it ("the ray tracer propagates rays through the
     reflecting object if they intersect after the first bounce", §4), so D is
@@ -96,7 +98,8 @@ class TracedView:
     diffuse : (P, R, R, 3) float32
         Diffuse layer d = k_d/π · E_sh9(n), mean over the part's samples.
     fresnel : (P, R, R) float32
-        Fresnel modulation layer F (Schlick), mean over the part's samples.
+        Fresnel modulation layer F (Schlick, the mean of its RGB channels), mean over the
+        part's samples.
     distant : (P, R, R, 3) float32
         Distant layer D (reflector transparent after the first bounce), mean over the
         part's samples; defined wherever coverage > 0.
@@ -213,7 +216,9 @@ class SceneTracer:
         self.environment = np.asarray(scene.environment.radiance, dtype=np.float32)
         self.sh9 = project_latlong_sh9(self.environment)
         self.kd = np.array([n.material.kd for n in reflectors], dtype=np.float64)
-        self.f0 = np.array([n.material.fresnel for n in reflectors], dtype=np.float64)
+        self.f0 = np.array(  # (P, 3): f_λ per RGB channel
+            [np.broadcast_to(np.asarray(n.material.fresnel, float), (3,)) for n in reflectors]
+        )
         positions, normals, part, albedo = [], [], [], []
         index = {id(n): i for i, n in enumerate(reflectors)}
         for node in scene.nodes:
@@ -289,12 +294,12 @@ class SceneTracer:
         return albedo / np.pi * np.maximum(irradiance_sh9(self.sh9, normals), 0.0)
 
     def _reflector_terms(self, tri, t, u, v, origins, directions):
-        """Point, normal, mirror direction, Fresnel and diffuse term at reflector hits."""
+        """Point, normal, mirror direction, (n, 3) Fresnel and diffuse term at reflector hits."""
         p = origins + t[:, None] * directions
         n = self._shading_normal(tri, u, v, directions)
         r = directions - 2.0 * np.einsum("ij,ij->i", directions, n)[:, None] * n
         part = self.part[tri]
-        fresnel = schlick(self.f0[part], np.einsum("ij,ij->i", r, n))
+        fresnel = schlick(self.f0[part], np.einsum("ij,ij->i", r, n)[:, None])
         diffuse = self._diffuse_radiance(self.kd[part], n)
         return p + n * self.ray_offset, n, r, fresnel, diffuse
 
@@ -314,9 +319,7 @@ class SceneTracer:
             p, _, r, fresnel, diffuse = self._reflector_terms(
                 tri[refl], t[refl], u[refl], v[refl], o, d
             )
-            out[refl] = (1.0 - fresnel)[:, None] * diffuse + fresnel[:, None] * self.radiance(
-                p, r, depth
-            )
+            out[refl] = (1.0 - fresnel) * diffuse + fresnel * self.radiance(p, r, depth)
         return out
 
     def radiance(self, origins, directions, depth: int | None = None):
@@ -435,7 +438,7 @@ class SceneTracer:
             li = np.flatnonzero(is_local)
             hit3 = self._intersect(True, p[li], r[li])
             distant[li] = self._shade(*hit3, p[li], r[li], 0)
-        radiance[ri] = (1.0 - fresnel)[:, None] * diffuse + fresnel[:, None] * incident
+        radiance[ri] = (1.0 - fresnel) * diffuse + fresnel * incident
 
         n_parts, npix = len(self.part_names), size * size
         bins = part[ri] * npix + pix[ri]
@@ -472,7 +475,7 @@ class SceneTracer:
             background=image(np.where(refl[:, None], 0.0, radiance)).astype(np.float32),
             coverage=(count / samples).astype(np.float32),
             diffuse=(acc(diffuse) / safe[..., None]).astype(np.float32),
-            fresnel=(acc(fresnel) / safe).astype(np.float32),
+            fresnel=(acc(fresnel.mean(axis=1)) / safe).astype(np.float32),
             distant=(acc(distant) / safe[..., None]).astype(np.float32),
             local_rgb=(acc(incident * is_local[:, None]) / local_safe).astype(np.float32),
             local_alpha=(local_count / safe).astype(np.float32),
