@@ -10,6 +10,11 @@ materials have a counterpart in both:
 - GGX: ours ``model=microfacet, kd=0, fresnel=1`` with alpha =
   sqrt(2 / (4N + 2)), Mitsuba ``roughconductor`` with ``material="none"``
   (F = 1), ``distribution="ggx"`` and the same alpha.
+- Coloured f_λ (issue 28): ours ``model=microfacet, kd=0, fresnel=gold`` (linear RGB
+  F0 (1, 0.71, 0.29), Schlick per channel at v·h), Mitsuba ``principled`` with
+  ``metallic=1``, ``base_color`` = that F0 and ``roughness`` = sqrt(alpha): the same
+  GGX lobe times the same Schlick F per channel (mitsuba_scene.schlick_ggx_bsdf says
+  why, and why a ``roughconductor`` tint is not the counterpart).
 
 The Phong lobe of seed 000 eq. 7 (``model=phong`` with a glossy part) has no
 Mitsuba counterpart (Mitsuba 3 has no Phong BSDF), so it is not compared here;
@@ -103,6 +108,12 @@ MATERIALS = {
         0.5,
     ),
 }
+GOLD = (1.0, 0.71, 0.29)  # core/presets.py's gold
+MATERIALS["gold"] = (
+    {**MATERIALS["ggx"][0], "fresnel": "gold"},
+    ms.schlick_ggx_bsdf(GGX_ALPHA, GOLD),
+    0.5,
+)
 MODEL_TOLERANCE = 0.005
 SILHOUETTE_TOLERANCE = 0.03
 Z_BOUND, Z_INSIDE = 4.5, 0.99
@@ -298,7 +309,7 @@ def compare(
         The test's GL context.
     scene, size
         What to render and at what size.
-    material_name : {"diffuse", "ggx"}
+    material_name : {"diffuse", "ggx", "gold"}
         Key of :data:`MATERIALS`.
     pixel_filter : bool
         Footprint on or off, in both renderers.
@@ -408,6 +419,17 @@ def test_traced_sphere_agrees_with_mitsuba(gl_ctx, material, pixel_filter):
     """A convex sphere: ours traced, Mitsuba at the matched depth, within the noise of both."""
     scene, size = sphere_scene()
     compare(gl_ctx, scene, size, material, pixel_filter, tracing.TRACE_BOUNCES)
+
+
+def test_traced_sphere_coloured_fresnel_agrees_with_mitsuba_principled(gl_ctx):
+    """f_λ = gold, per channel: ours against Mitsuba's metallic principled BSDF, pixel centres.
+
+    Each channel's ratio is checked on its own (:func:`compare`), so a Fresnel applied to
+    the wrong channel, or grey, would show: gold's blue is 0.29 of its red at normal incidence.
+    """
+    scene, size = sphere_scene()
+    stats = compare(gl_ctx, scene, size, "gold", False, tracing.TRACE_BOUNCES)
+    assert stats["pixels"] >= 150
 
 
 @pytest.mark.parametrize("material", ["diffuse", "ggx"])
