@@ -19,7 +19,8 @@ Schlick F of f0 = ``fresnel``; diffuse k_d/π (1 − F(n·v)) E(n)):
   off, c = 1, the single-scattering model the reference renders.
 - E(n): SH irradiance with cap lights (engine/sh_irradiance.py), sun-robust by default.
 
-Roughness ↔ level: Filament's mapping (cmgen: "map the lod to a linear_roughness,
+Roughness ↔ level: Filament's mapping (prefilter.roughness, shared with ``envstudio
+prefilter --chain --kernel ggx``; cmgen: "map the lod to a linear_roughness,
 here we're using ^2"). Of K = log2(n) + 1 levels (n the chain's face edge),
 level k holds α_k = (k/(K − 1))², so lod = (K − 1)·√α: linear in the perceptual
 roughness √α, which spreads the levels evenly over what the eye sees as
@@ -54,23 +55,17 @@ from envstudio.plugin import (
     set_eq8_uniforms,
     sh_parameters,
 )
+from envstudio.prefilter import roughness
 from envstudio.prefilter.chain_gpu import gpu_filtered_cube, level_samples
+from envstudio.prefilter.roughness import level_of
 
 #: The least α: below it the GGX lobe is a mirror to float precision.
 MIN_ALPHA = 1e-6
 
 
 def level_alphas(size: int) -> list[float]:
-    """α_k = (k/(K − 1))² of the K = log2(n) + 1 levels of an n² chain (module docstring)."""
-    levels = int(math.log2(size)) + 1
-    return [(k / (levels - 1)) ** 2 for k in range(levels)]
-
-
-def level_of(alpha: float, levels: int) -> tuple[int, float]:
-    """(k, t): α lies between levels k and k + 1, t of the way (lod = (K − 1)·√α)."""
-    lod = (levels - 1) * math.sqrt(alpha)
-    k = min(int(lod), levels - 2)
-    return k, lod - k
+    """α_k of the K = log2(n) + 1 levels of an n² chain (prefilter.roughness.level_alphas)."""
+    return roughness.level_alphas(int(math.log2(size)) + 1)
 
 
 class SplitSumMethod(Method):
