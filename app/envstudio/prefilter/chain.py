@@ -41,14 +41,18 @@ class ChainLevel:
     faces
         (6, n_k, n_k, 3) float32 linear radiance, core.cubemap face order.
     exponent
-        N_k.
+        N_k, or the GGX α_k when ``kernel`` is "ggx" (prefilter.roughness).
     source_rows
         Rows of the lat-long source it was filtered from.
+    kernel
+        "phong" (prefilter.kernels.phong) or "ggx" (prefilter.kernels.ggx; α = 0: the
+        environment itself).
     """
 
     faces: np.ndarray
     exponent: float
     source_rows: int
+    kernel: str = "phong"
 
 
 def gloss_exponents(levels: int, scale: float, bias: float) -> list[float]:
@@ -111,15 +115,21 @@ def chain_level_error(radiance: np.ndarray, level, samples: int = 256) -> tuple[
     """RMS and max |level − brute force| over the level's mean, at sampled texels.
 
     The brute force (:func:`envstudio.prefilter.brute_force.prefilter`) sums the full-resolution
-    source at the level's exponent, at ``samples`` texels spread evenly over the
-    faces (every k-th); both errors are relative to the brute-force mean there.
+    source with the level's kernel (Phong N or GGX α > 0), at ``samples`` texels spread
+    evenly over the faces (every k-th); both errors are relative to the brute-force mean there.
+
+    Raises
+    ------
+    ValueError
+        For a GGX level of α = 0: the environment resampled, not filtered (nothing to check).
     """
     n = level.faces.shape[1]
     directions = target_directions("cube", n).reshape(-1, 3)
     stride = max(1, len(directions) // samples)
-    truth = brute_force.prefilter(
-        radiance, directions[::stride], kernels.phong(level.exponent)
-    ).astype(np.float64)
+    if level.kernel == "ggx" and level.exponent == 0.0:
+        raise ValueError("a GGX level of alpha = 0 is the environment itself, not filtered")
+    kernel = (kernels.ggx if level.kernel == "ggx" else kernels.phong)(level.exponent)
+    truth = brute_force.prefilter(radiance, directions[::stride], kernel).astype(np.float64)
     got = level.faces.reshape(-1, 3)[::stride]
     mean = truth.mean()
     return float(np.sqrt(np.mean((got - truth) ** 2)) / mean), float(

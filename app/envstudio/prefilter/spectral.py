@@ -35,6 +35,13 @@ Unser's recursion (:func:`_prefilter_rows`) over the grid padded across the pole
 the targets is a cached sparse matrix. In a chain, level 0 (about half the work) runs on
 one thread and the other levels on the rest (:func:`spectral_chain`).
 
+The same sums hold for any kernel of ⟨r, l⟩ alone; :func:`ggx_spectral_chain` uses them for
+the split-sum GGX lobe (prefilter.kernels.ggx, N = V = R) with the lobe's width set by α
+(σ ≈ α near the peak, so N = 1/α² for the grid spacing) and Θ where the lobe falls to
+``eps`` of its peak, found numerically: GGX's tails are long (at α = 0.02 Θ is some 40°,
+at α ≥ 0.1 the hemisphere), so m_max is found by doubling the equator's sampling until
+its spectrum has fallen below ``eps`` well inside it.
+
 Cost per map, for a source of h rows: the source's row DFTs once (shared by every level
 of a chain), then R × (rows within Θ) × m_max complex multiply-adds per channel, which
 falls as N^−½ with the lobe's width (R and m_max grow as N^½, the rows within Θ shrink as
@@ -57,13 +64,15 @@ import scipy.fft
 from numpy.lib.stride_tricks import as_strided
 from scipy import sparse
 
-from envstudio.core import cubemap, latlong
+from envstudio.core import cubemap, latlong, resample
+from envstudio.prefilter import kernels, roughness
 from envstudio.prefilter.chain import ChainLevel, gloss_exponents
 
 __all__ = [
     "DEFAULT_EPS",
     "SpectralPlan",
     "clear_lookups",
+    "ggx_spectral_chain",
     "phong_spectral",
     "plan",
     "source_spectrum",
@@ -87,7 +96,7 @@ class SpectralPlan:
     Attributes
     ----------
     exponent
-        N.
+        N (``kernel`` "phong") or GGX α ("ggx").
     source_shape
         (h, w) of the source.
     stride, split
@@ -109,6 +118,7 @@ class SpectralPlan:
     offset: int
     weights: np.ndarray
     grid_cols: int
+    kernel: str = "phong"
 
     @property
     def frequencies(self) -> int:
@@ -136,6 +146,26 @@ def _phong(exponent: float, c: np.ndarray) -> np.ndarray:
     return out
 
 
+def _ggx(alpha: float, c: np.ndarray) -> np.ndarray:
+    """The normalised split-sum GGX lobe k(c) of prefilter.kernels.ggx, in c's dtype."""
+    kernel = kernels.ggx(alpha)
+    a2 = alpha * alpha
+    c = np.maximum(c, 0.0)
+    denominator = (1.0 - c) * 0.5 * (1.0 - a2) + a2
+    return (kernel.scale * a2 * a2 * c / (denominator * denominator)).astype(c.dtype)
+
+
+def _lobe_width(kernel: str, parameter: float, eps: float) -> tuple[float, float]:
+    """(N, Θ): the Phong exponent that sets the grid spacing, and the angle past which the
+    lobe is below ``eps`` of its peak (module docstring)."""
+    if kernel == "phong":
+        return parameter, min(math.acos(eps ** (1.0 / parameter)), 0.5 * math.pi)
+    theta = np.linspace(0.0, 0.5 * math.pi, 4097)
+    shape = _ggx(parameter, np.cos(theta)) / _ggx(parameter, np.ones(1))[0]
+    inside = np.nonzero(shape >= eps)[0]
+    return 1.0 / parameter**2, float(theta[min(inside[-1] + 1, len(theta) - 1)])
+
+
 def _stride(height: int, wanted_rows: int) -> int:
     """q: the largest divisor of h with h / q ≥ the rows wanted (1 if h has fewer)."""
     best = 1
@@ -146,28 +176,41 @@ def _stride(height: int, wanted_rows: int) -> int:
 
 
 @lru_cache(maxsize=32)
-def plan(height: int, width: int, exponent: float, eps: float = DEFAULT_EPS) -> SpectralPlan:
-    """The tables for a Phong exponent N and an (h, w) lat-long source (module docstring).
+def plan(
+    height: int, width: int, exponent: float, eps: float = DEFAULT_EPS, kernel: str = "phong"
+) -> SpectralPlan:
+    """The tables for a Phong exponent N (or a GGX α, ``kernel="ggx"``) and an (h, w)
+    lat-long source (module docstring).
 
-    Cached: they depend on the source's shape and N only.
+    Cached: they depend on the source's shape, the kernel and N (α) only.
     """
+    if kernel not in ("phong", "ggx"):
+        raise ValueError(f"kernel {kernel!r}: expected 'phong' or 'ggx'")
     if not exponent > 0:
-        raise ValueError(f"Phong exponent must be > 0, got {exponent}")
+        raise ValueError(f"Phong exponent or GGX alpha must be > 0, got {exponent}")
+    width_n, theta_max = _lobe_width(kernel, exponent, eps)
     # Frequencies: the narrowest row pair in φ is the equator's, g(Δφ) = k(cos Δφ) (float64:
     # float32 rounding alone is above 1e-6 of the peak's spectrum), sampled finely enough
     # for its spectrum down to eps whatever the source's columns.
-    reach = math.sqrt(2.0 * exponent * math.log(1.0 / eps)) + 16.0
+    reach = math.sqrt(2.0 * width_n * math.log(1.0 / eps)) + 16.0
     fine = max(width, 1 << math.ceil(math.log2(4.0 * reach)))
-    cos_dphi = np.cos(2.0 * math.pi * np.arange(fine) / fine)
-    equator = np.where(cos_dphi > 0, np.maximum(cos_dphi, 1e-300) ** exponent, 0.0)
-    spectrum = np.abs(np.fft.rfft(equator))
-    above = np.nonzero(spectrum > eps * spectrum[0])[0]
-    m_max = int(above[-1] if len(above) else 0)
+    while True:
+        cos_dphi = np.cos(2.0 * math.pi * np.arange(fine) / fine)
+        if kernel == "phong":
+            equator = np.where(cos_dphi > 0, np.maximum(cos_dphi, 1e-300) ** exponent, 0.0)
+        else:
+            equator = _ggx(exponent, cos_dphi)
+        spectrum = np.abs(np.fft.rfft(equator))
+        above = np.nonzero(spectrum > eps * spectrum[0])[0]
+        m_max = int(above[-1] if len(above) else 0)
+        if kernel == "phong" or 4 * m_max < fine:
+            break
+        fine *= 2
     samples = max(64, 1 << math.ceil(math.log2(2 * (m_max + 1))))
-    # Rows: source rows within Θ of the grid row, cos^N Θ = eps. The grid has R = h p / q
-    # rows: every q-th source row boundary (q | h) or p rows per source row when h is short.
-    theta_max = min(math.acos(eps ** (1.0 / exponent)), 0.5 * math.pi)
-    wanted = max(16, math.ceil(math.pi * math.sqrt(exponent) / _SPACING))
+    # Rows: source rows within Θ of the grid row (the lobe below eps of its peak past Θ).
+    # The grid has R = h p / q rows: every q-th source row boundary (q | h) or p rows per
+    # source row when h is short.
+    wanted = max(16, math.ceil(math.pi * math.sqrt(width_n) / _SPACING))
     if wanted <= height:
         q, p = _stride(height, wanted), 1
     else:
@@ -193,11 +236,12 @@ def plan(height: int, width: int, exponent: float, eps: float = DEFAULT_EPS) -> 
     sin_part = (np.sin(theta)[:, None] * np.sin(theta_l)).astype(np.float32)
     # g is even in Δφ: its DFT over ``samples`` points is the DCT-I of the first half.
     cos_t = np.cos(2.0 * math.pi * np.arange(samples // 2 + 1) / samples).astype(np.float32)
-    g = _phong(exponent, cos_part[..., None] + sin_part[..., None] * cos_t)
+    lobe = _phong if kernel == "phong" else _ggx
+    g = lobe(exponent, cos_part[..., None] + sin_part[..., None] * cos_t)
     g *= (band[row] * inside / samples).astype(np.float32)[..., None]
     weights = scipy.fft.dct(g, type=1, axis=-1, workers=-1)[..., : m_max + 1]
     weights = np.ascontiguousarray(weights.transpose(0, 2, 1)[:, :, None, :], dtype=np.float32)
-    return SpectralPlan(float(exponent), (height, width), q, p, offset, weights, grid_cols)
+    return SpectralPlan(float(exponent), (height, width), q, p, offset, weights, grid_cols, kernel)
 
 
 def source_spectrum(radiance: npt.ArrayLike, frequencies: int) -> np.ndarray:
@@ -422,19 +466,67 @@ def spectral_chain(
     h, w = image.shape[:2]
     exponents = gloss_exponents(levels, scale, bias)
     plans = [plan(h, w, float(exponent), eps) for exponent in exponents]
+    faces = _chain_faces(image, size, plans, threads)
+    return [ChainLevel(f, p.exponent, h) for f, p in zip(faces, plans, strict=True)]
+
+
+def ggx_spectral_chain(
+    radiance: npt.ArrayLike,
+    size: int,
+    levels: int,
+    *,
+    eps: float = DEFAULT_EPS,
+    threads: int = 2,
+) -> list[ChainLevel]:
+    """The split-sum GGX cube chain: level k prefiltered with α_k (prefilter.roughness).
+
+    Level 0 (α = 0, the mirror) is the environment resampled into the cube
+    (core.resample.latlong_to_cube, as the GPU conversion does); every other level is
+    the GGX lobe of prefilter.kernels.ggx (N = V = R) by :func:`plan` with ``kernel="ggx"``.
+
+    Parameters
+    ----------
+    radiance
+        (h, w, 3) lat-long radiance.
+    size
+        Face edge n of level 0, a power of two.
+    levels
+        K, 1 ≤ K ≤ log2(n) + 1; level k has faces of n >> k texels.
+    eps, threads
+        As :func:`spectral_chain`.
+
+    Returns
+    -------
+    list of ChainLevel
+        Largest first, ``kernel`` "ggx" and ``exponent`` α_k.
+    """
+    image = np.asarray(radiance, dtype=np.float32)
+    h, w = image.shape[:2]
+    alphas = roughness.level_alphas(levels)
+    plans = [plan(h, w, alpha, eps, "ggx") for alpha in alphas[1:]]
+    mirror = resample.latlong_to_cube(image, size).astype(np.float32)
+    chain = [ChainLevel(mirror, 0.0, h, "ggx")]
+    if plans:
+        faces = _chain_faces(image, size, plans, threads, first_level=1)
+        chain += [ChainLevel(f, p.exponent, h, "ggx") for f, p in zip(faces, plans, strict=True)]
+    return chain
+
+
+def _chain_faces(
+    image: np.ndarray, size: int, plans: list[SpectralPlan], threads: int, first_level: int = 0
+) -> list[npt.NDArray[np.float32]]:
+    """The faces of every plan's level, plan j at level ``first_level`` + j (face n >> level)."""
     padded, before = _padded_spectrum(
         source_spectrum(image, max(p.frequencies for p in plans)), plans
     )
+    edges = [max(1, size >> k) for k in range(first_level, first_level + len(plans))]
     if threads == 1:
-        faces = [_level(padded, before, p, max(1, size >> k), None) for k, p in enumerate(plans)]
-    else:
-        # Level 0 costs about as much as all the others (docs/prefilter/README.md): it runs
-        # on one thread, the rest on the others, each level's product single-threaded.
-        with ThreadPoolExecutor(threads) as pool:
-            first = pool.submit(_level, padded, before, plans[0], size, None)
-            rest = [
-                pool.submit(_level, padded, before, p, max(1, size >> k), None)
-                for k, p in enumerate(plans[1:], start=1)
-            ]
-            faces = [first.result()] + [r.result() for r in rest]
-    return [ChainLevel(f, p.exponent, h) for f, p in zip(faces, plans, strict=True)]
+        return [_level(padded, before, p, n, None) for p, n in zip(plans, edges, strict=True)]
+    # Level 0 costs about as much as all the others (docs/prefilter/README.md): it runs
+    # on one thread, the rest on the others, each level's product single-threaded.
+    with ThreadPoolExecutor(threads) as pool:
+        futures = [
+            pool.submit(_level, padded, before, p, n, None)
+            for p, n in zip(plans, edges, strict=True)
+        ]
+        return [f.result() for f in futures]
