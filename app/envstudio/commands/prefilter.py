@@ -12,6 +12,7 @@ import json
 import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -39,6 +40,10 @@ MAX_SIZE = 16384
 
 def kernel_from_args(args: argparse.Namespace) -> kernels.Kernel:
     """The kernel named by ``--kernel`` with its ``--exponent`` / ``--lobe`` / ``--kd``."""
+    if args.kernel == "ggx":
+        raise ParameterError(
+            "--kernel ggx: only with --chain (one GGX roughness per level, Filament's mapping)"
+        )
     if args.kernel == "phong":
         if args.exponent is None:
             raise ParameterError("--kernel phong needs --exponent N (a Phong exponent > 0)")
@@ -148,18 +153,37 @@ def run_prefilter(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_chain_output(args: argparse.Namespace) -> tuple[Path, str]:
+    """The chain's ``-o`` path and its suffix, checked against ``--pixel-format``."""
+    output = check_output_path(args.output)
+    suffix = output.suffix.lower()
+    if suffix not in (".dds", ".exr", ".ktx2"):
+        raise ParameterError(f"-o {output}: expected a .dds, .ktx2 or .exr file name")
+    pixel_format = getattr(args, "pixel_format", None)
+    if pixel_format is not None and suffix != ".dds":
+        raise ParameterError(f"--pixel-format {pixel_format}: only for a .dds output")
+    if pixel_format == "rgba8" and args.kernel == "ggx":
+        raise ParameterError(
+            "--kernel ggx --pixel-format rgba8: RGBA8 clamps radiance to [0, 1] and a GGX "
+            "chain is HDR; use --pixel-format rgba16f (the default), .ktx2 or .exr"
+        )
+    return output, suffix
+
+
 def run_chain(args: argparse.Namespace) -> int:
-    """``envstudio prefilter --chain``: the Phong cube mip chain, its SH, and the check."""
+    """``envstudio prefilter --chain``: the Phong or GGX cube mip chain, its SH, the check."""
     from envstudio.core.cubemap import faces_to_cross
     from envstudio.core.sh import project_latlong_sh9
     from envstudio.io.dds import write_dds_cube
     from envstudio.prefilter.chain import chain_level_error, gloss_exponents, prefiltered_chain
 
-    if args.param != "cube" or args.kernel != "phong" or args.exponent is not None:
+    if args.param != "cube" or args.kernel not in ("phong", "ggx") or args.exponent is not None:
         raise ParameterError(
-            "--chain: a Phong cube chain (--param cube, no --exponent: N comes from "
-            "--gloss-scale and --gloss-bias per level)"
+            "--chain: a Phong or GGX cube chain (--param cube, --kernel phong|ggx, no "
+            "--exponent: Phong's N comes from --gloss-scale and --gloss-bias per level, "
+            "GGX's alpha from the level)"
         )
+    ggx = args.kernel == "ggx"
     size = args.size
     if size < 1 or size & (size - 1) or size > MAX_SIZE:
         raise ParameterError(f"--size {size}: --chain needs a power of two in 1..{MAX_SIZE}")
@@ -177,10 +201,7 @@ def run_chain(args: argparse.Namespace) -> int:
             f"--gloss-scale {args.gloss_scale:g} --gloss-bias {args.gloss_bias:g}: level 0's "
             "exponent would exceed 100000"
         )
-    output = check_output_path(args.output)
-    suffix = output.suffix.lower()
-    if suffix not in (".dds", ".exr"):
-        raise ParameterError(f"-o {output}: expected a .dds or .exr file name")
+    output, suffix = _check_chain_output(args)
     device = getattr(args, "device", "cpu")
     samples = getattr(args, "samples", 256)
     if not 1 <= samples <= 16384:
@@ -191,13 +212,25 @@ def run_chain(args: argparse.Namespace) -> int:
     spectral = algo == "spectral"
     if spectral and device == "gpu":
         raise ParameterError("--algo spectral --device gpu: the spectral chain runs on the CPU")
+    if ggx and not spectral:
+        raise ParameterError(
+            f"--kernel ggx --algo {algo} --device {device}: the GGX chain is the spectral one "
+            "on the CPU (method splitsum filters its levels on the GPU)"
+        )
     if spectral:
         _check_spectral_memory(size)
     radiance = _source(args)
     check_memory(6 * size * size * 2, radiance.shape[0] * radiance.shape[1])
     ctx = None if spectral else _chain_context(device)
     start = time.perf_counter()
-    if spectral:
+    if ggx:
+        from envstudio.prefilter.spectral import ggx_spectral_chain
+
+        chain = ggx_spectral_chain(
+            radiance, size, args.levels, threads=args.threads or default_threads()
+        )
+        where = "CPU (spectral)"
+    elif spectral:
         from envstudio.prefilter.spectral import spectral_chain
 
         chain = spectral_chain(
@@ -243,8 +276,14 @@ def run_chain(args: argparse.Namespace) -> int:
         )
         where = "CPU (hierarchical)"
     seconds = time.perf_counter() - start
+    faces = [level.faces for level in chain]
+    sh9 = project_latlong_sh9(radiance)
     if suffix == ".dds":
-        written = [write_dds_cube(output, [level.faces for level in chain])]
+        written = [write_dds_cube(output, faces, getattr(args, "pixel_format", None) or "rgba16f")]
+    elif suffix == ".ktx2":
+        from envstudio.io.ktx2 import write_ktx2_cube
+
+        written = [write_ktx2_cube(output, faces, _chain_metadata(chain))]
     else:
         written = [
             write_image(output.with_name(f"{output.stem}_mip{k}.exr"), faces_to_cross(level.faces))
@@ -254,24 +293,51 @@ def run_chain(args: argparse.Namespace) -> int:
         "environment": str(args.env),
         "order": "seed 000 eq. 9: Y0; Y1..Y3 = y, z, x; Y4, Y5, Y7 = xy, yz, xz; "
         "Y6 = 3z^2 - 1; Y8 = x^2 - y^2",
-        "coefficients": project_latlong_sh9(radiance).tolist(),
+        "coefficients": sh9.tolist(),
     }
     sh_path = output.with_name(f"{output.stem}.sh.json")
     write_text_atomic(sh_path, json.dumps(sh, indent=2) + "\n")
+    if getattr(args, "gltf", False):
+        from envstudio.io.gltf_ibl import write_lights_image_based
+
+        extras = {"environment": str(args.env), **_chain_metadata(chain)}
+        if suffix == ".ktx2":
+            extras["ktx2"] = output.name
+        written.append(
+            write_lights_image_based(output.with_suffix(".gltf"), sh9, faces, extras=extras)[-1]
+        )
     print(
         f"{', '.join(map(str, written))}, {sh_path}: {len(chain)} levels in {seconds:.2f} s "
         f"on the {where}"
     )
     for k, level in enumerate(chain):
+        what = f"alpha = {level.exponent:.4g}" if ggx else f"N = {level.exponent:.4g}"
         line = (
-            f"  level {k}: {level.faces.shape[1]}² N = {level.exponent:.4g} "
+            f"  level {k}: {level.faces.shape[1]}² {what} "
             f"from {2 * level.source_rows}x{level.source_rows}"
         )
-        if args.check:
+        if args.check and ggx and level.exponent == 0.0:
+            line += ", the environment resampled (core.resample.latlong_to_cube), not filtered"
+        elif args.check:
             rms, worst = chain_level_error(radiance, level)
             line += f", vs brute force: rms {100 * rms:.3f} %, max {100 * worst:.3f} % of the mean"
         print(line)
     return 0
+
+
+def _chain_metadata(chain) -> dict[str, str]:
+    """The chain's kernel and per-level parameter, as the KTX2 key/value data holds them."""
+    values = " ".join(f"{level.exponent:.9g}" for level in chain)
+    if chain[0].kernel == "ggx":
+        return {
+            "envstudio.kernel": "ggx (split sum, N = V = R; Karis 2013)",
+            "envstudio.roughness": values,
+            "envstudio.roughnessMapping": "alpha_k = (k / (K - 1))^2 (Filament), GGX alpha",
+        }
+    return {
+        "envstudio.kernel": "phong (normalised, (N + 1)/2pi cos^N)",
+        "envstudio.exponent": values,
+    }
 
 
 def _free_memory() -> int | None:
@@ -404,9 +470,10 @@ def add_arguments(prefilter: argparse.ArgumentParser) -> None:
     add_env_width_option(prefilter)
     prefilter.add_argument(
         "--kernel",
-        choices=("diffuse", "phong", "lobe"),
+        choices=("diffuse", "phong", "lobe", "ggx"),
         default="phong",
-        help="diffuse k_d/π<n,l>, normalised Phong (N+1)/2π<r,l>^N, or a tabulated lobe p(<r,l>)",
+        help="diffuse k_d/π<n,l>, normalised Phong (N+1)/2π<r,l>^N, a tabulated lobe p(<r,l>), "
+        "or (--chain only) the split-sum GGX lobe, alpha_k = (k/(K-1))^2 per level",
     )
     prefilter.add_argument("--exponent", type=float, help="Phong exponent N > 0 (phong only)")
     prefilter.add_argument("--lobe", help="lobe table: CSV of (cosine, value) rows (lobe only)")
@@ -441,8 +508,9 @@ def add_arguments(prefilter: argparse.ArgumentParser) -> None:
     prefilter.add_argument(
         "--chain",
         action="store_true",
-        help="a Phong cube mip chain for engines, N = 2^(scale*g + bias) per level "
-        "(-o OUT.dds: DX10 RGBA16F cube with mips; OUT.exr: a cross per level), "
+        help="a cube mip chain for engines, Phong N = 2^(scale*g + bias) per level or "
+        "(--kernel ggx) GGX alpha_k = (k/(K-1))^2 (-o OUT.ktx2: KTX 2.0 RGBA16F cube with "
+        "mips; OUT.dds: DX10 cube with mips; OUT.exr: a cross per level), "
         "plus OUT.sh.json (9 SH coefficients)",
     )
     prefilter.add_argument("--levels", type=int, default=8, help="--chain: mip levels")
@@ -468,7 +536,21 @@ def add_arguments(prefilter: argparse.ArgumentParser) -> None:
         help="--chain on the GPU: importance samples per texel of level 0, doubled per level "
         "(default 256)",
     )
-    prefilter.add_argument("-o", "--output", required=True, help="OUT.exr (--chain: or OUT.dds)")
+    prefilter.add_argument(
+        "--pixel-format",
+        choices=("rgba16f", "rgba8"),
+        default=None,
+        help="--chain -o OUT.dds: half floats (default) or bytes clamped to [0, 1] (LDR)",
+    )
+    prefilter.add_argument(
+        "--gltf",
+        action="store_true",
+        help="--chain: also OUT.gltf, a glTF EXT_lights_image_based light (SH irradiance, "
+        "RGBD PNG faces per level)",
+    )
+    prefilter.add_argument(
+        "-o", "--output", required=True, help="OUT.exr (--chain: or OUT.dds, OUT.ktx2)"
+    )
 
 
 COMMAND = Command(
