@@ -40,8 +40,24 @@ install_python_environment() {
     fi
 }
 
+# three.js (its KTX2Loader) and ktx-parse, the KTX2 readers nobody here wrote, for
+# tests/test_prefilter_ktx2.py; into .node/ (ignored by git), pinned, once
+NODE_PACKAGES=(three@0.187.0 ktx-parse@2.0.0)
+
+install_node_packages() {
+    command -v npm >/dev/null || { echo "run.sh: npm not found: the KTX2 reader tests will fail" >&2; return 0; }
+    local stamp=".node/.installed-$(echo "${NODE_PACKAGES[*]}" | sha1sum | cut -c1-12)"
+    [ -f "$stamp" ] && return 0
+    echo "run.sh: installing npm packages into .node: ${NODE_PACKAGES[*]}" >&2
+    mkdir -p .node
+    npm install --prefix .node --no-audit --no-fund --silent "${NODE_PACKAGES[@]}"
+    rm -f .node/.installed-*
+    touch "$stamp"
+}
+
 install_debian_packages
 install_python_environment
+install_node_packages
 
 command="${1:-view}"
 [ $# -gt 0 ] && shift
