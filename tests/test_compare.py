@@ -70,7 +70,8 @@ def test_compare_writes_every_file_and_a_number_for_each_method(small_scene, tmp
     assert report["mask_pixels"] > 100
     # the reference takes --param values only it declares; mirror takes kd/fresnel from the scene
     assert report["reference"]["parameters"]["tolerance"] == 0.05
-    assert report["methods"]["mirror"]["matched"] == {"fresnel": 0.5, "kd": pytest.approx(0.3)}
+    matched = report["methods"]["mirror"]["matched"]
+    assert matched == {"fresnel": [0.5] * 3, "kd": pytest.approx([0.3] * 3)}, "RGB, issue 28"
     mirror = report["methods"]["mirror"]
     assert 5.0 < mirror["psnr_db"] < 60.0
     assert 0.0 < mirror["ssim"] < 1.0
@@ -160,8 +161,8 @@ def test_parameters_go_to_every_method_that_declares_them():
     plan = plan_parameters(
         [ReferenceMethod, _MipChain], ["fresnel=0.5", "max_samples=64", "exposure=1"]
     )
-    assert plan.methods["reference"] == {"fresnel": 0.5, "max_samples": 64}
-    assert plan.methods["mip_chain_test"] == {"fresnel": 0.5}
+    assert plan.methods["reference"] == {"fresnel": (0.5, 0.5, 0.5), "max_samples": 64}
+    assert plan.methods["mip_chain_test"] == {"fresnel": 0.5}, "each by its own declaration"
     assert plan.display == {"exposure": 1.0}
 
 
