@@ -119,3 +119,24 @@ def test_tracing_the_bunny_only_darkens_its_diffuse_term(gl_ctx):
     assert darkened.mean() > 0.01, f"only {darkened.mean():.3f} of the bunny is occluded"
     ratio = traced[cover].mean() / untraced[cover].mean()
     assert ratio < 0.99, ratio  # measured 0.982
+
+
+@pytest.mark.parametrize("material", [DIFFUSE, GGX], ids=["diffuse", "ggx"])
+def test_the_untraced_estimate_of_a_traced_run_is_the_untraced_run(gl_ctx, material):
+    """untraced_too: the same samples' environment radiance equals a separate untraced run
+    (the same directions, weights and footprint points), for compare's approximation error."""
+    scene = reflector_scene(bunny(), studio_like())
+    session = RenderSession(scene, ctx=gl_ctx)
+    method = session.method("reference")
+    settings = {"sequence": "random", "adaptive": False, "samples": 8, "max_samples": 10**6}
+    method.values.update({**settings, **material, "trace": True, "untraced_too": True})
+    session.renderer.display["background"] = False
+    for _ in range(3):
+        session.render_offscreen(method, SIZE)
+    shared, traced = method.untraced_estimate(), method.estimate()
+    assert np.isfinite(method.untraced_relative_standard_error())
+    session.release()
+    untraced, _, cover = accumulate(gl_ctx, scene, 3, trace=False, **settings, **material)
+    assert cover.sum() > 200
+    np.testing.assert_allclose(shared[cover], untraced[cover], rtol=1e-4, atol=1e-6)
+    assert not np.allclose(traced[cover], untraced[cover], rtol=1e-3)  # the bunny occludes

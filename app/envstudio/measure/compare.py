@@ -67,7 +67,12 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
-from envstudio.measure.ground_truth import SCENE_EFFECTS, ConvergenceStatus, GroundTruth
+from envstudio.measure.ground_truth import (
+    SCENE_EFFECTS,
+    UNTRACED_TOO,
+    ConvergenceStatus,
+    GroundTruth,
+)
 from envstudio.measure.matching import match_glossiness, match_roughness
 from envstudio.measure.stopping import (
     NOISE_RULE,
@@ -451,11 +456,13 @@ def run_comparison(
         reference.values.update(base)
         reference.values.update(_reference_values(session, reference, model, members, base))
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
+        shared = decompose and SCENE_EFFECTS in reference.values
+        shared = shared and bool(reference.values[SCENE_EFFECTS])
+        if shared:  # the untraced estimate from the same samples
+            reference.values[UNTRACED_TOO] = True
         runs[model], mask = _converge(session, reference, size, progress, cache, judge)
-        if decompose and SCENE_EFFECTS in reference.values and reference.values[SCENE_EFFECTS]:
-            reference.values[SCENE_EFFECTS] = False
-            judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
-            untraced[model], _ = _converge(session, reference, size, progress, cache, judge)
+        if shared:
+            untraced[model] = _untraced_run(session, reference, runs[model], mask)
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
     model_of[truth] = first
@@ -713,6 +720,20 @@ def _converge(
         wall_s=wall_s,
     )
     return run, mask
+
+
+def _untraced_run(
+    session: RenderSession, reference: GroundTruth, traced: ReferenceRun, mask
+) -> ReferenceRun:
+    """The untraced estimate the traced run accumulated from the same samples, as a run."""
+    hdr = np.where(mask[..., None], reference.untraced_estimate(), traced.hdr).astype(np.float32)
+    return replace(
+        traced,
+        parameters=traced.parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
+        relative_standard_error=reference.untraced_relative_standard_error(),
+        hdr=hdr,
+        display=_display_image(session, hdr),
+    )
 
 
 def _reflector_mask(session: RenderSession, reference: GroundTruth) -> npt.NDArray[np.bool_]:

@@ -93,6 +93,8 @@ class ConvergenceStatus:
 
 #: The ground truth's bool parameter that turns on what no environment map shows.
 SCENE_EFFECTS = "trace"
+#: Its bool parameter that, with scene effects on, gives the untraced estimate too.
+UNTRACED_TOO = "untraced_too"
 
 
 class GroundTruth(Protocol):
@@ -101,7 +103,9 @@ class GroundTruth(Protocol):
     Besides the :class:`~envstudio.engine.method.Method` contract: parameters
     ``samples``, ``max_samples``, ``tolerance`` and ``time_limit``, and
     :data:`SCENE_EFFECTS`, on when it renders what no environment map shows
-    (self-occlusion, interreflection) and off for the environment-map model itself.
+    (self-occlusion, interreflection) and off for the environment-map model itself,
+    and :data:`UNTRACED_TOO`, which with scene effects on also accumulates the
+    environment-map model's estimate from the same samples (:meth:`untraced_estimate`).
     """
 
     name: str
@@ -124,6 +128,12 @@ class GroundTruth(Protocol):
 
     def coverage(self) -> npt.NDArray[np.bool_]:
         """(h, w) pixels the estimate covers (row 0 at the top)."""
+
+    def untraced_estimate(self) -> npt.NDArray[np.float32] | None:
+        """(h, w, 3) the untraced estimate of the same samples (:data:`UNTRACED_TOO`), or None."""
+
+    def untraced_relative_standard_error(self) -> float:
+        """Its noise, as :meth:`relative_standard_error`."""
 
     def accumulation_state(self) -> dict[str, npt.NDArray]:
         """The accumulation as arrays, to save."""

@@ -186,6 +186,15 @@ class ReferenceMethod(Method):
             help="Trace the scene's triangles: self-occlusion, local and self-reflections.",
         ),
         Parameter(
+            "untraced_too",
+            "bool",
+            False,
+            rebuild=True,
+            help="With trace: also accumulate the untraced estimate (the environment-map model) "
+            "from the same samples (with trace only): compare's approximation error at no "
+            "second run.",
+        ),
+        Parameter(
             "pixel_filter",
             "bool",
             True,
@@ -275,6 +284,8 @@ class ReferenceMethod(Method):
         self._sum_sq: moderngl.Texture | None = None
         self._sums_fbo: moderngl.Framebuffer | None = None
         self._batch: moderngl.Texture | None = None  # this batch's sums and counts
+        # with untraced_too: the untraced estimate's batch and sums, from the same samples
+        self._untraced: tuple[moderngl.Texture, moderngl.Texture, moderngl.Texture] | None = None
         self._depth: moderngl.Renderbuffer | None = None
         self._batch_fbo: moderngl.Framebuffer | None = None
         self._depth_fbo: moderngl.Framebuffer | None = None
@@ -472,6 +483,8 @@ class ReferenceMethod(Method):
             self._ensure_targets(frame.size)
             self._sums_fbo.clear(0.0, 0.0, 0.0, 0.0)
             self._batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
+            for tex in (self._untraced or ())[1:]:
+                tex.write(np.zeros((*frame.size[::-1], 4), np.float32).tobytes())
             self.status = ConvergenceStatus()
             self._set_allocation(SampleAllocation.plain((frame.size[1], frame.size[0])))
             self._snapshots = {}
@@ -527,6 +540,10 @@ class ReferenceMethod(Method):
             self.ctx.blend_func = moderngl.DEFAULT_BLENDING
             self.ctx.depth_func = "<"
 
+    def _shares_untraced(self) -> bool:
+        """Whether each batch also gives the untraced estimate (``untraced_too`` with tracing)."""
+        return bool(self.values["trace"] and self.values["untraced_too"])
+
     def _uses_bvh(self) -> bool:
         """Whether the scene's triangles are traced: for local light or for the pixel footprint."""
         return bool(self.values["trace"] or self.values["pixel_filter"])
@@ -573,7 +590,7 @@ class ReferenceMethod(Method):
         """The estimator with this frame's uniforms, for a target of ``size`` at ``samples``."""
         trace = bool(self.values["trace"])
         require_version(self.ctx, 430, "method reference needs OpenGL 4.3 (storage buffers)")
-        defines = {"TRACE_LOCAL": int(trace)}
+        defines = {"TRACE_LOCAL": int(trace), "UNTRACED_TOO": int(self._shares_untraced())}
         if self._uses_bvh():
             defines["TRACE_STACK"] = self._trace.stack_size
         program = self.programs.get("reference/accumulate.glsl", defines)
@@ -621,15 +638,22 @@ class ReferenceMethod(Method):
         return chunk
 
     def _merge_batch(self) -> None:
-        """Add the finished batch's mean per pixel (and its square) to the sums; clear it."""
+        """Add the finished batch's mean per pixel (and its square) to the sums; clear it.
+
+        With ``untraced_too`` the untraced batch is merged into its own sums the same way.
+        """
         program = self.programs.compute("reference/merge_batch.glsl")
         self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
-        self._batch.bind_to_image(0, read=True, write=False)
-        self._sum.bind_to_image(1, read=True, write=True)
-        self._sum_sq.bind_to_image(2, read=True, write=True)
+        sets = [(self._batch, self._sum, self._sum_sq)]
+        if self._untraced is not None:
+            sets.append(self._untraced)
         w, h = self._sum.size
-        program.run((w + 7) // 8, (h + 7) // 8)
-        self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
+        for batch, total, squares in sets:
+            batch.bind_to_image(0, read=True, write=False)
+            total.bind_to_image(1, read=True, write=True)
+            squares.bind_to_image(2, read=True, write=True)
+            program.run((w + 7) // 8, (h + 7) // 8)
+            self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
         self._batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
 
     def _samples_inside_lobe(self, scene: GpuScene) -> bool:
@@ -679,18 +703,33 @@ class ReferenceMethod(Method):
         total, squares = self._read()
         return np.sqrt(_batch_variance(total, squares) / np.maximum(total[..., 3:], 1.0))
 
+    def untraced_estimate(self) -> npt.NDArray[np.float32] | None:
+        """(h, w, 3) the untraced estimate from the same samples (``untraced_too``), else None.
+
+        The environment-map model the methods approximate: every sample's
+        direction sees the environment, nothing blocks or reflects it.
+        """
+        if self._untraced is None:
+            return None
+        total = _read_texture(self._untraced[1])
+        return total[..., :3] / np.maximum(total[..., 3:], 1.0)
+
+    def untraced_relative_standard_error(self) -> float:
+        """The untraced estimate's noise, as :meth:`relative_standard_error` (inf without one)."""
+        if self._untraced is None or self.status.batches < 2:
+            return float("inf")
+        total, squares = (_read_texture(tex) for tex in self._untraced[1:])
+        count = np.maximum(total[..., 3:], 1.0)
+        error = np.sqrt(_batch_variance(total, squares) / count)
+        return median_relative_error(total[..., :3] / count, error, total[..., 3] > 0)
+
     def coverage(self) -> npt.NDArray[np.bool_]:
         """(h, w) True where the reflectors have samples."""
         total, _ = self._read()
         return total[..., 3] > 0
 
     def _read(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        w, h = self._sum.size
-        out = []
-        for tex in (self._sum, self._sum_sq):
-            data = np.frombuffer(tex.read(), dtype=np.float32).reshape(h, w, 4)[::-1]
-            out.append(data.copy())
-        return out[0], out[1]
+        return _read_texture(self._sum), _read_texture(self._sum_sq)
 
     def _mean_samples(self) -> int:
         """Estimates per covered pixel so far (the multipliers are fixed between doublings)."""
@@ -775,6 +814,14 @@ class ReferenceMethod(Method):
             "checks": np.asarray(checks, np.float64).reshape(-1, 3),
             "seconds": np.float64(self.status.elapsed()),
             **self._sample_allocation.as_arrays(),
+            **(
+                {
+                    "untraced_sum": _read_texture(self._untraced[1]),
+                    "untraced_sum_sq": _read_texture(self._untraced[2]),
+                }
+                if self._untraced is not None
+                else {}
+            ),
         }
 
     def resume(self, state: dict[str, npt.NDArray]) -> None:
@@ -808,7 +855,10 @@ class ReferenceMethod(Method):
         shape = (size[1], size[0], 4)
         if state["sum"].shape != shape or state["sum_sq"].shape != shape:
             return
-        for tex, name in ((self._sum, "sum"), (self._sum_sq, "sum_sq")):
+        pairs = [(self._sum, "sum"), (self._sum_sq, "sum_sq")]
+        if self._untraced is not None and "untraced_sum" in state:
+            pairs += [(self._untraced[1], "untraced_sum"), (self._untraced[2], "untraced_sum_sq")]
+        for tex, name in pairs:
             tex.write(np.ascontiguousarray(state[name][::-1], np.float32).tobytes())
         batches = int(state["batches"])
         change = float(state["rms_change"])
@@ -830,7 +880,12 @@ class ReferenceMethod(Method):
     # -- resources ---------------------------------------------------------------------------
 
     def _ensure_targets(self, size: tuple[int, int]) -> None:
-        if self._sum is not None and self._sum.size == tuple(size):
+        shared = self._shares_untraced()
+        if (
+            self._sum is not None
+            and self._sum.size == tuple(size)
+            and (self._untraced is not None) == shared
+        ):
             return
         self._release_targets()
         self._sum = self.ctx.texture(size, 4, dtype="f4")
@@ -838,7 +893,11 @@ class ReferenceMethod(Method):
         self._sums_fbo = self.ctx.framebuffer([self._sum, self._sum_sq])
         self._batch = self.ctx.texture(size, 4, dtype="f4")
         self._depth = self.ctx.depth_renderbuffer(size)
-        self._batch_fbo = self.ctx.framebuffer([self._batch], self._depth)
+        colours = [self._batch]
+        if shared:
+            self._untraced = tuple(self.ctx.texture(size, 4, dtype="f4") for _ in range(3))
+            colours.append(self._untraced[0])
+        self._batch_fbo = self.ctx.framebuffer(colours, self._depth)
         self._depth_fbo = self.ctx.framebuffer(depth_attachment=self._depth)
         self._allocation = self.ctx.texture(size, 2, dtype="f4")
         self._allocation.filter = (moderngl.NEAREST, moderngl.NEAREST)
@@ -856,6 +915,9 @@ class ReferenceMethod(Method):
         for obj in (*targets, self._sum, self._sum_sq, self._batch, self._allocation):
             if obj is not None:
                 obj.release()
+        for tex in self._untraced or ():
+            tex.release()
+        self._untraced = None
         self._depth_fbo = self._batch_fbo = self._sums_fbo = self._depth = None
         self._sum = self._sum_sq = self._batch = self._allocation = None
 
@@ -879,6 +941,12 @@ def estimate_shader_files() -> list[str]:
         _, source_map = preprocess(program, "COMPUTE_SHADER", read_shader)
         files += [name for name in source_map.files if name not in files]
     return sorted(files)
+
+
+def _read_texture(tex: moderngl.Texture) -> npt.NDArray[np.float32]:
+    """(h, w, 4) float32 of an RGBA32F target, row 0 at the top."""
+    w, h = tex.size
+    return np.frombuffer(tex.read(), dtype=np.float32).reshape(h, w, 4)[::-1].copy()
 
 
 def _saved_snapshots(state: dict[str, npt.NDArray], batches: int) -> dict[int, npt.NDArray]:
