@@ -24,7 +24,9 @@ prefilter --chain --kernel ggx``; cmgen: "map the lod to a linear_roughness,
 here we're using ^2"). Of K = log2(n) + 1 levels (n the chain's face edge),
 level k holds α_k = (k/(K − 1))², so lod = (K − 1)·√α: linear in the perceptual
 roughness √α, which spreads the levels evenly over what the eye sees as
-glossiness, and ends at the 1² level with α = 1, the widest lobe. Level 0 (α = 0)
+glossiness, and ends at level K − 1 with α = 1, the widest lobe. Level k ≥ 1 has
+faces of n/2^k texels but at least 8² (:data:`MIN_LEVEL_EDGE`: a 2² or 1² face does not
+hold a wide lobe, issue 30), so the count K, not the sizes, follows the mip chain. Level 0 (α = 0)
 is the environment cube itself, read as ``mirror`` reads it (hardware trilinear
 with the screen-space LOD): α → 0 is the mirror. A material's α between two
 levels blends them (what ``textureLod`` would do on one chain; α is one value per
@@ -61,11 +63,20 @@ from envstudio.prefilter.roughness import level_of
 
 #: The least α: below it the GGX lobe is a mirror to float precision.
 MIN_ALPHA = 1e-6
+#: The least face edge of a level. The mip-chain sizes n/2^k leave the widest lobes 2² and
+#: 1² faces, whose bilinear (seamless) lookups were 13 % off the lobe they hold on studio.exr
+#: (α ≥ 0.73 of a 128² chain, issue 30); at 8² they are within 2 % of it, as the larger levels.
+MIN_LEVEL_EDGE = 8
 
 
 def level_alphas(size: int) -> list[float]:
     """α_k of the K = log2(n) + 1 levels of an n² chain (prefilter.roughness.level_alphas)."""
     return roughness.level_alphas(int(math.log2(size)) + 1)
+
+
+def level_edge(size: int, k: int) -> int:
+    """Face edge of level k ≥ 1 of an n² chain: n/2^k, at least :data:`MIN_LEVEL_EDGE` (or n)."""
+    return max(min(MIN_LEVEL_EDGE, size), size >> k)
 
 
 class SplitSumMethod(Method):
@@ -194,7 +205,7 @@ class SplitSumMethod(Method):
         start = time.perf_counter()
         with frame.timer.measure("splitsum.prefilter"):
             for k, alpha in enumerate(level_alphas(size)[1:], start=1):
-                m = max(1, size >> k)
+                m = level_edge(size, k)
                 count = level_samples(samples, k - 1)
                 faces = gpu_filtered_cube(self.ctx, self.programs, static.cube, m, alpha, count)
                 cube = self.ctx.texture_cube((m, m), 3, dtype="f4")
