@@ -26,6 +26,7 @@ uniform float u_coat_f0;
 uniform float u_base_exponent;
 uniform float u_metallic;
 uniform vec3 u_paint;
+uniform bool u_irradiance_cube;  // lambertian: u_environment holds E(n)/pi (Miller's map)
 in vec2 v_uv;
 out vec4 f_color;
 
@@ -77,7 +78,8 @@ void main() {
     if (u_brdf == 0) {
         value = lobe_average(0, r, u_phong_exponent, n, false);
     } else if (u_brdf == 1) {
-        value = lobe_average(1, n, 1.0, n, false);
+        value = u_irradiance_cube ? textureLod(u_environment, n, 0.0).rgb
+                                  : lobe_average(1, n, 1.0, n, false);
     } else {
         vec3 glossy = lobe_average(0, r, u_base_exponent, n, true);
         vec3 diffuse = lobe_average(1, n, 1.0, n, true);

@@ -66,7 +66,8 @@ class GpuBaker:
         frame : (3, 3) float
             The view's camera frame T_j.
         samples
-            Importance samples per lobe and texel.
+            Importance samples per lobe and texel; 0 for ``lambertian`` from a cube
+            that holds E(n)/π already (Miller's map): each texel reads it along n.
         """
         spec = brdf(name)
         program = self.programs.get(_PROGRAM)
@@ -75,7 +76,9 @@ class GpuBaker:
         set_uniform(program, "u_cube_size", float(cube.size[0]))
         set_uniform(program, "u_frame", np.asarray(frame, dtype=np.float32))
         set_uniform(program, "u_brdf", spec.code)
-        set_uniform(program, "u_samples", int(samples))
+        # samples 0: the cube holds E(n)/pi already (engine/miller_map.py), read along n
+        set_uniform(program, "u_samples", max(int(samples), 1))
+        set_uniform(program, "u_irradiance_cube", int(samples) == 0)
         set_uniform(program, "u_phong_exponent", values.get("phong_exponent", 1.0))
         set_uniform(program, "u_coat_f0", values.get("coat_f0", 0.0))
         set_uniform(program, "u_base_exponent", values.get("base_exponent", 1.0))

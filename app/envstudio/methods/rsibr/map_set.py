@@ -62,6 +62,7 @@ class MapSet:
         key: tuple,
         static: StaticEnvironment,
         budget_ms: float | None,
+        cube: moderngl.TextureCube | None = None,
     ) -> None:
         """Bring the set to ``key``, baking within ``budget_ms`` (None: all at once).
 
@@ -74,12 +75,15 @@ class MapSet:
             The static environment the maps are baked from.
         budget_ms
             Milliseconds this call may bake for (at least one view), None for no limit.
+        cube
+            What the bake reads instead of the static environment's cube (samples 0:
+            a map of E(n)/π, methods.rsibr.gpu_bake); cached under the static's key.
         """
         if key == self._key:
             self._pending = None
             return
         if self._pending is None or self._pending["key"] != key:
-            self._start(key, static)
+            self._start(key, static, cube)
         if self._pending is not None:
             self._continue(budget_ms)
 
@@ -99,7 +103,9 @@ class MapSet:
         """The map generator of the last :meth:`generate` (its sources, accumulation)."""
         return self._generator
 
-    def _start(self, key: tuple, static: StaticEnvironment) -> None:
+    def _start(
+        self, key: tuple, static: StaticEnvironment, cube: moderngl.TextureCube | None
+    ) -> None:
         env_key = self._env_keys.get(key[:2])
         if env_key is None:
             env_key = rb.environment_key(read_cube(static.cube, 0, self.programs))
@@ -119,7 +125,7 @@ class MapSet:
         self._pending = {
             "key": key,
             "path": path,
-            "cube": static.cube,
+            "cube": static.cube if cube is None else cube,
             "env": env_key,
             "views": views,
             "faces": faces,

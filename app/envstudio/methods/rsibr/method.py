@@ -45,6 +45,7 @@ from envstudio.methods.rsibr.map_set import MapSet
 from envstudio.plugin import (
     FrameInputs,
     Method,
+    MillerDiffuseMap,
     Parameter,
     StaticEnvironment,
     fresnel_parameter,
@@ -89,6 +90,15 @@ class RsibrMethod(Method):
             applies_when={"brdf": ("phong", "lambertian")},
         ),
         Parameter(
+            "diffuse_maps",
+            "choice",
+            "prefiltered",
+            choices=("prefiltered", "baked"),
+            help="Lambertian maps of k_d: prefiltered (each texel E(n)/pi from Miller's map, "
+            "engine/miller_map.py) or baked (importance-sampled, diffuse_samples).",
+            applies_when={"brdf": "phong"},
+        ),
+        Parameter(
             "diffuse_samples",
             "int",
             1024,
@@ -118,6 +128,7 @@ class RsibrMethod(Method):
         super().__init__(ctx, programs)
         self._glossy = MapSet(ctx, programs)
         self._diffuse = MapSet(ctx, programs)
+        self._miller = MillerDiffuseMap(ctx, programs)
         #: T_d of the last frame drawn (Figure 4's destination frame).
         self.last_frame_d: np.ndarray | None = None
         self._thumbnails: list[moderngl.Texture] = []
@@ -152,14 +163,16 @@ class RsibrMethod(Method):
         scene_key = (id(frame.scene), static.revision)
         values = tuple(sorted(self.bake_values().items()))
         glossy = (*scene_key, self.values["brdf"], values, self.map_size, DEFAULT_SAMPLES)
-        wanted = [(self._glossy, glossy)]
+        wanted = [(self._glossy, glossy, None)]
         if self._needs_diffuse_maps():
-            samples = int(self.values["diffuse_samples"])
+            prefiltered = self.values["diffuse_maps"] == "prefiltered"
+            samples = 0 if prefiltered else int(self.values["diffuse_samples"])
             diffuse = (*scene_key, "lambertian", (), self.map_size, samples)
-            wanted.append((self._diffuse, diffuse))
+            source = self._miller.update(frame, "rsibr") if prefiltered else None
+            wanted.append((self._diffuse, diffuse, source))
         with frame.timer.measure("rsibr.bake"):
-            for maps, key in wanted:
-                maps.update(key, static, self.frame_budget_ms)
+            for maps, key, source in wanted:
+                maps.update(key, static, self.frame_budget_ms, source)
                 if maps.pending is not None:
                     return  # one bake at a time within the frame budget
 
@@ -290,4 +303,5 @@ class RsibrMethod(Method):
     def release(self) -> None:
         self._glossy.release()
         self._diffuse.release()
+        self._miller.release()
         self._release_thumbnails()
