@@ -35,3 +35,9 @@ vec3 sh_irradiance(vec3 n) {
 #endif
     return max(e, vec3(0.0));
 }
+
+// E(n) where k_d has a channel above 0, else 0: a black diffuse term costs no SH evaluation
+// (a uniform branch; `mirror` is the bench's baseline, and k_d = 0 its common case).
+vec3 sh_irradiance_if(vec3 kd, vec3 n) {
+    return any(greaterThan(kd, vec3(0.0))) ? sh_irradiance(n) : vec3(0.0);
+}

@@ -20,6 +20,6 @@ void main() {
     vec3 n, r;
     reflection_frame(v_world_normal, v_world_position, u_camera_position, n, r);
     vec3 mirror = texture(u_environment, r).rgb;
-    f_color = vec4(eq8_shade(n, r, sh_irradiance(n) / PI, mirror, u_kd, u_fresnel), 1.0);
+    f_color = vec4(eq8_shade(n, r, sh_irradiance_if(u_kd, n) / PI, mirror, u_kd, u_fresnel), 1.0);
 }
 #endif

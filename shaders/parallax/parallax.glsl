@@ -64,6 +64,6 @@ void main() {
     float turn = max(length(dFdx(dn)), length(dFdy(dn)));
     float footprint = log2(max(turn * u_cube_size * 0.5, 1e-6));
     vec3 glossy = level <= max(footprint, 0.0) ? sharp : blurred;
-    f_color = vec4(eq8_shade(n, r, sh_irradiance(n) / PI, glossy, u_kd, u_fresnel), 1.0);
+    f_color = vec4(eq8_shade(n, r, sh_irradiance_if(u_kd, n) / PI, glossy, u_kd, u_fresnel), 1.0);
 }
 #endif

@@ -78,7 +78,7 @@ void main() {
     vec3 radiance = mix(texture(u_level_a, r).rgb, texture(u_level_b, r).rgb, u_level_mix);
     vec3 specular = radiance * (f0 * dfg.x + dfg.y);
 #endif
-    vec3 diffuse = u_kd * (1.0 - schlick_fresnel(u_fresnel, n_dot_v)) * sh_irradiance(n) / PI;
+    vec3 diffuse = u_kd * (1.0 - schlick_fresnel(u_fresnel, n_dot_v)) * sh_irradiance_if(u_kd, n) / PI;
     f_color = vec4(diffuse + specular * compensation, 1.0);
 }
 #endif
