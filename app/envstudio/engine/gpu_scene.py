@@ -33,6 +33,7 @@ from envstudio.envmap.dynamic_cube import DynamicCube, LocalObject
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.timers import PassTimer
+from envstudio.gpu.uniforms import set_uniform
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 
@@ -266,3 +267,13 @@ class FrameInputs:
     size: tuple[int, int]
     timer: PassTimer
     target: moderngl.Framebuffer
+
+    def draw_reflectors(self, program: moderngl.Program) -> None:
+        """Draw every reflector with ``program``: ``u_view`` and ``u_projection`` of this
+        frame, ``u_model`` and ``u_normal_matrix`` per node (common/mesh_vs.glsl's inputs)."""
+        set_uniform(program, "u_view", self.view)
+        set_uniform(program, "u_projection", self.projection)
+        for gpu_node in self.scene.reflectors():
+            set_uniform(program, "u_model", gpu_node.model)
+            set_uniform(program, "u_normal_matrix", gpu_node.normal)
+            gpu_node.mesh.render(program)

@@ -22,12 +22,7 @@ class FlatMethod(Method):
     def render(self, frame: FrameInputs) -> None:
         frame.target.use()
         program = self.programs.get("flat/flat.glsl")
-        set_uniform(program, "u_view", frame.view)
-        set_uniform(program, "u_projection", frame.projection)
         set_uniform(program, "u_colour", tuple(self.values["colour"]))
         set_uniform(program, "u_ambient", float(self.values["ambient"]))
         with frame.timer.measure("flat"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)  # u_view, u_projection, u_model, u_normal_matrix

@@ -241,13 +241,8 @@ class HwConvMethod(Method):
         set_uniform(program, "u_camera_position", frame.camera_position)
         set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
         set_uniform(program, "u_kd", tuple(self.values["kd"]))
-        set_uniform(program, "u_view", frame.view)
-        set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("hwconv"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def _draw_map(self, frame: FrameInputs, maps: FaceMaps) -> None:
         """One map as the frame: front face left, back face right (shaders/hwconv/view.glsl)."""

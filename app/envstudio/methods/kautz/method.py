@@ -137,7 +137,6 @@ class KautzMethod(Method):
     # -- rendering ---------------------------------------------------------------------------
 
     def render(self, frame: FrameInputs) -> None:
-        scene = frame.scene
         coefficients = int(self.values["sh_coefficients"])
         lights = int(self.values["lights"])
         if self.values["dynamic"]:
@@ -158,13 +157,8 @@ class KautzMethod(Method):
         set_uniform(program, "u_lod_bias", float(self.values["lod_bias"]))
         set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
         set_uniform(program, "u_kd", tuple(self.values["kd"]))
-        set_uniform(program, "u_view", frame.view)
-        set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("kautz"):
-            for gpu_node in scene.reflectors():
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def _update_static(self, frame: FrameInputs) -> moderngl.TextureCube:
         """The static environment's cube (or its cross-face chain), its SH projected.

@@ -48,12 +48,7 @@ class MirrorMethod(Method):
         set_uniform(program, "u_environment", 0)
         set_eq8_uniforms(program, frame, self.values)
         with frame.timer.measure("mirror"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_view", frame.view)
-                set_uniform(program, "u_projection", frame.projection)
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def release(self) -> None:
         """Free the SH block; safe to call twice."""

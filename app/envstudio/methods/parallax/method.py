@@ -176,12 +176,7 @@ class ParallaxMethod(Method):
         set_uniform(program, "u_cube_size", float(cube.size[0]))
         set_eq8_uniforms(program, frame, self.values)
         with frame.timer.measure("parallax"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_view", frame.view)
-                set_uniform(program, "u_projection", frame.projection)
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def _probe_environment(self, frame: FrameInputs, probe: np.ndarray) -> moderngl.TextureCube:
         """The cube seen from the probe: the static environment, or a capture at the probe.

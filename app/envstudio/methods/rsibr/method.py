@@ -263,13 +263,8 @@ class RsibrMethod(Method):
         set_uniform(program, "u_shading", _SHADING[self.bake.brdf])
         set_uniform(program, "u_fresnel", tuple(self.values["fresnel"]))
         set_uniform(program, "u_kd", tuple(self.values["kd"]))
-        set_uniform(program, "u_view", frame.view)
-        set_uniform(program, "u_projection", frame.projection)
         with frame.timer.measure("rsibr.render"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def _diffuse_map(self, frame_d: np.ndarray) -> moderngl.Texture | None:
         """The normal-warped Lambertian map for T_d, or None where none applies or is baked."""

@@ -187,12 +187,7 @@ class SplitSumMethod(Method):
         set_uniform(program, "u_multiscatter", bool(self.values["multiscatter"]))
         set_eq8_uniforms(program, frame, self.values)
         with frame.timer.measure("splitsum"):
-            for gpu_node in frame.scene.reflectors():
-                set_uniform(program, "u_view", frame.view)
-                set_uniform(program, "u_projection", frame.projection)
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+            frame.draw_reflectors(program)
 
     def _update_chain(self, frame: FrameInputs, static: StaticEnvironment) -> None:
         """Filter levels 1 … K − 1 when the environment or a chain setting changed."""
