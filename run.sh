@@ -45,6 +45,11 @@ install_python_environment() {
 NODE_PACKAGES=(three@0.187.0 ktx-parse@2.0.0)
 
 install_node_packages() {
+    if ! command -v npm >/dev/null && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+        echo "run.sh: installing Debian packages: nodejs npm" >&2
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
+    fi
     command -v npm >/dev/null || { echo "run.sh: npm not found: the KTX2 reader tests will fail" >&2; return 0; }
     local stamp=".node/.installed-$(echo "${NODE_PACKAGES[*]}" | sha1sum | cut -c1-12)"
     [ -f "$stamp" ] && return 0

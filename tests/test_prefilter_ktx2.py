@@ -99,8 +99,7 @@ def test_ktx2_header_index_and_dfd_are_the_spec_s(tmp_path):
 
 
 def node_modules() -> Path:
-    if shutil.which("node") is None:
-        pytest.skip("no Node.js on this machine: the npm readers cannot run")
+    assert shutil.which("node"), f"no Node.js on this machine: the npm readers cannot run; {RUN_SH}"
     assert (NODE_MODULES / "three").is_dir() and (NODE_MODULES / "ktx-parse").is_dir(), RUN_SH
     return NODE_MODULES
 
