@@ -155,3 +155,16 @@ def test_a_folder_of_another_grid_is_refused_unless_forced(tmp_path, capsys):
     (tmp_path / "atlas-settings.json").write_text(json.dumps({"size": [64, 64]}))
     assert atlas(tmp_path, "--methods", "mirror", "--exponents", "100") == 2
     assert "holds an atlas of other settings" in capsys.readouterr().err
+
+
+def test_a_method_that_crashes_is_marked_and_the_rest_is_measured(tmp_path, monkeypatch):
+    from envstudio.methods.kautz.method import KautzMethod
+
+    def crash(self, frame):
+        raise RuntimeError("boom\nmore")
+
+    monkeypatch.setattr(KautzMethod, "render", crash)
+    result = run_atlas(grid(), tmp_path)
+    rows = {r["method"]: r for r in result.rows}
+    assert rows["kautz"]["error"] == "RuntimeError: boom" and result.failed == 1
+    assert rows["mirror"]["error"] is None and rows["mirror"]["scene_error"] > 0

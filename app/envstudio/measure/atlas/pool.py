@@ -27,21 +27,30 @@ Task = tuple[SceneCell, list[str], dict, Path]
 def measure_task(task: Task) -> list[dict]:
     """Measure one scene's methods; a method that fails is measured alone and marked.
 
-    Never raises for bad input: the rows say why (one line) instead.
+    Never raises for a failing method (bad input or a fault in its code): its rows say
+    why in one line instead, and the other methods are still measured.
     """
     cell, methods, settings, folder = task
     try:
         return measure_scene_cell(cell, methods, settings, folder)
-    except UserError as error:
+    except Exception as error:  # the atlas goes on and reports the cell
         if len(methods) == 1:
-            return failed_rows(cell, methods, str(error))
+            return failed_rows(cell, methods, _one_line(error))
     rows = []
     for method in methods:  # which one failed: each alone (the references are cached)
         try:
             rows += measure_scene_cell(cell, [method], settings, folder)
-        except UserError as error:
-            rows += failed_rows(cell, [method], str(error))
+        except Exception as error:
+            rows += failed_rows(cell, [method], _one_line(error))
     return rows
+
+
+def _one_line(error: Exception) -> str:
+    """A user error's own line; any other fault as its type and first line."""
+    if isinstance(error, UserError):
+        return str(error)
+    text = str(error).splitlines()[0] if str(error) else ""
+    return f"{type(error).__name__}: {text}".rstrip(": ")
 
 
 def run_tasks(
