@@ -2,12 +2,14 @@
 
 import pytest
 
+from envstudio.core.ggx import alpha_for_exponent, exponent_for_alpha
 from envstudio.core.parameters import Parameter
 from envstudio.engine.method import Method
+from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
 from envstudio.measure.compare import plan_parameters, run_comparison
-from envstudio.measure.matching import match_glossiness
+from envstudio.measure.matching import GlossinessLink, glossiness, match_glossiness
 from envstudio.methods.kautz.method import KautzMethod
 from envstudio.methods.reference.method import ReferenceMethod
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
@@ -113,3 +115,83 @@ def test_matched_kautz_in_both_lod_modes_is_within_1_db_against_the_reference(gl
     session.release()
     assert abs(psnr["bias"] - psnr["level"]) < 1.0, psnr
     assert "not bias" in lines["bias"] and "matched at lod_mode=level" in lines["level"]
+
+
+CUBE = 64
+
+
+def _declared(cls: type[Method]) -> Method:
+    """A method with ``cls``'s name and parameter declarations, made without GL (matching
+    reads and sets only the values)."""
+    attrs = {"name": cls.name, "title": cls.title, "summary": cls.summary}
+    attrs |= {"parameters": cls.parameters, "render": lambda self, frame: None}
+    return type(f"Declared{cls.__name__}", (Method,), attrs)(None, None)
+
+
+def _tiles() -> dict[str, Method]:
+    return {name: _declared(cls) for name, cls in available_methods().items()}
+
+
+def _compare_values(exponent: float) -> dict[str, tuple]:
+    """Each method's glossiness as compare gives it at the reference's N = ``exponent``:
+    the plan's values, then matched to the reference (compare._render_method)."""
+    classes = list(available_methods().values())
+    truth = ground_truth_class()
+    plan = plan_parameters(classes, [f"phong_exponent={exponent!r}"])
+    reference = _declared(truth)
+    reference.values.update(plan.methods[truth.name])
+    expected = {truth.name: glossiness(reference)}
+    for cls in classes:
+        if cls is not truth:
+            method = _declared(cls)
+            method.values.update(plan.methods[cls.name])
+            match_glossiness(method, reference, CUBE)
+            expected[cls.name] = glossiness(method)
+    return expected
+
+
+def _assert_tiles(tiles: dict[str, Method], expected: dict[str, tuple]) -> None:
+    for name, values in expected.items():
+        got = dict(glossiness(tiles[name]))
+        for key, value in values:
+            exact = isinstance(value, str)  # lod_mode
+            assert got[key] == (value if exact else pytest.approx(value, rel=1e-9)), (name, key)
+
+
+@pytest.mark.parametrize("exponent", [10.0, 100.0, 1000.0])
+def test_the_grid_gives_every_tile_what_compare_gives(exponent):
+    """The main method (hwconv) at N: every tile gets compare's value at that N; then a tile
+    that changes (splitsum's alpha, kautz's b) leads, and the rest follow through N."""
+    tiles = _tiles()
+    hub = tiles[ground_truth_class().name]
+    tiles["hwconv"].values["phong_exponent"] = exponent
+    link = GlossinessLink()
+    assert link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE) is tiles["hwconv"]
+    _assert_tiles(tiles, _compare_values(exponent))
+    assert link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE) is None  # no change
+
+    alpha = float(alpha_for_exponent(2 * exponent))  # no direct alpha <-> b conversion
+    tiles["splitsum"].values["roughness"] = alpha
+    assert link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE) is tiles["splitsum"]
+    _assert_tiles(tiles, {**_compare_values(exponent_for_alpha(alpha)), "splitsum": ()})
+    assert tiles["kautz"].values["lod_bias"] == pytest.approx(
+        float(lod_bias_for_exponent(exponent_for_alpha(alpha), CUBE))
+    )
+
+    tiles["kautz"].values["lod_bias"] = bias = 1.5
+    link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE)
+    _assert_tiles(tiles, {**_compare_values(float(exponent_for_lod_bias(bias, CUBE))), "kautz": ()})
+
+
+def test_matching_switched_on_again_takes_the_main_methods_look():
+    """Off, a tile's own value stays (follow is not called); on again, the main method leads."""
+    tiles = _tiles()
+    hub = tiles[ground_truth_class().name]
+    link = GlossinessLink()
+    link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE)
+    tiles["kautz"].values["lod_bias"] = 4.0  # edited while matching was off
+    link.forget()
+    assert link.follow(list(tiles.values()), tiles["hwconv"], hub, CUBE) is tiles["hwconv"]
+    assert tiles["kautz"].values["lod_bias"] == pytest.approx(
+        float(lod_bias_for_exponent(100.0, CUBE))  # hwconv's default N
+    )

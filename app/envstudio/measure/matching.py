@@ -23,6 +23,8 @@ is and says so in its line when that is ``bias``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from envstudio.core.ggx import alpha_for_exponent, exponent_for_alpha
@@ -163,3 +165,95 @@ def match_roughness(target: Method, source: Method) -> str | None:
         clamp = "" if n == fitted else f" (exactly {fitted:.4g}, clamped)"
         return f"N = {n:.4g} matched to alpha = {alpha:g}{clamp} (alpha = sqrt(2 / (4N + 2)))"
     return None
+
+
+def match_through(
+    targets: Sequence[Method], source: Method, hub: Method | None, cube_size: int
+) -> dict[str, str | None]:
+    """Match every one of ``targets`` to ``source`` through ``hub``'s Phong exponent.
+
+    ``compare`` and the atlas hold one Phong exponent N (the reference's) and match
+    each method to it (:func:`match_glossiness`). The viewer's grid and split screen
+    do the same: ``hub`` (the ground truth) first takes ``source``'s look (its N from
+    ``source``'s b, α or N; f_λ and k_d copied), then each target is matched to the hub
+    exactly as ``compare`` matches a method to the reference. Matching two methods
+    directly would miss the pairs with no direct conversion (a LOD bias and a GGX α).
+
+    Parameters
+    ----------
+    targets
+        The methods whose values are set (``source`` among them is skipped).
+    source
+        The method whose look the others take.
+    hub
+        A method with a ``phong_exponent`` (the ground truth); None: direct matching.
+    cube_size
+        Face edge n of the environment cube map, texels.
+
+    Returns
+    -------
+    dict of str to str or None
+        Each matched target's name → its match line (:func:`match_glossiness`).
+    """
+    lines: dict[str, str | None] = {}
+    if hub is not None and source is not hub:
+        lines[hub.name] = match_glossiness(hub, source, cube_size)
+    via = hub if hub is not None else source
+    for target in targets:
+        if target is not source and target is not via:
+            lines[target.name] = match_glossiness(target, via, cube_size)
+    return {target.name: lines[target.name] for target in targets if target.name in lines}
+
+
+GLOSSINESS_NAMES = (*SHARED, "lod_mode")
+"""The values :func:`match_glossiness` reads and sets."""
+
+
+def glossiness(method: Method) -> tuple:
+    """``method``'s values of :data:`GLOSSINESS_NAMES` that it declares, comparable with ==."""
+    return tuple((name, method.values[name]) for name in GLOSSINESS_NAMES if name in method.values)
+
+
+class GlossinessLink:
+    """Keeps a set of methods matched: when one's glossiness or material changes, the others
+    follow (:func:`match_through`); unchanged methods are left alone between changes.
+
+    Each call compares every method's :func:`glossiness` with what it was after the
+    last call. The source is the main method when it changed or is new (the first
+    call, matching switched on again), else the first method that changed; a method
+    that is only new (a tile just added) takes the look, it does not give it.
+    """
+
+    def __init__(self) -> None:
+        self._seen: dict[str, tuple] = {}
+        self.lines: dict[str, str | None] = {}
+        """The last match's lines, by target name."""
+
+    def forget(self) -> None:
+        """Match everything to the main method on the next :meth:`follow` (matching re-enabled)."""
+        self._seen.clear()
+
+    def follow(
+        self, methods: Sequence[Method], main: Method, hub: Method | None, cube_size: int
+    ) -> Method | None:
+        """Match ``methods`` (``main`` among them or not) to the one that changed.
+
+        Returns
+        -------
+        Method or None
+            The source the others were matched to; None when nothing changed.
+        """
+        members = list({id(m): m for m in [main, *methods]}.values())
+        changed = [
+            m for m in members if m.name in self._seen and self._seen[m.name] != glossiness(m)
+        ]
+        new = [m for m in members if m.name not in self._seen]
+        source = None
+        if main in changed or main in new or (new and not changed):
+            source = main
+        elif changed:
+            source = changed[0]
+        if source is not None:
+            self.lines = match_through(members, source, hub, cube_size)
+        self._seen = {m.name: glossiness(m) for m in members}
+        return source

@@ -51,7 +51,7 @@ from envstudio.io.images import HDR_SUFFIXES
 from envstudio.io.meshes import MESH_SUFFIXES, load_mesh
 from envstudio.io.scene_file import shipped_scenes
 from envstudio.io.scene_setup import DEFAULT_SCENE, build_scene, replace_reflector
-from envstudio.measure.matching import match_glossiness
+from envstudio.measure.matching import GlossinessLink, match_through
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene
 from envstudio.ui.camera_control import CameraControl
@@ -340,6 +340,8 @@ class Viewer(WindowConfig):
         self.grid_view = GridView(self.session.renderer)
         self.grid_metrics = GridMetrics(self.session.renderer, _ground_truth_name())
         self.grid_labels: list[tuple[float, float, float, float]] = []
+        # glossiness matching through the ground truth's N, as compare matches
+        self.grid_link, self.split_link = GlossinessLink(), GlossinessLink()
         if options.grid is not None:
             self.grid.picked = list(options.grid)
             self.grid.enter()
@@ -425,9 +427,8 @@ class Viewer(WindowConfig):
             self.status.error(f"{name}: {exc}")
             return
         if self.compare.match and chosen is not previous:
-            self.compare.match_note = match_glossiness(
-                chosen, previous, self.session.gpu_scene.cube_size
-            )
+            lines = match_through([chosen], previous, self._hub(), self.session.gpu_scene.cube_size)
+            self.compare.match_note = lines.get(name)
         self.method_name = name
 
     def _cycle(self) -> None:
@@ -518,11 +519,15 @@ class Viewer(WindowConfig):
         try:
             if self.compare.other:
                 if self.compare.match:
-                    self.compare.match_note = match_glossiness(
-                        self.method(self.compare.other),
+                    self.split_link.follow(
+                        [self.method(self.compare.other)],
                         self.method(self.method_name),
+                        self._hub(),
                         self.session.gpu_scene.cube_size,
                     )
+                    self.compare.match_note = self.split_link.lines.get(self.compare.other)
+                else:
+                    self.split_link.forget()
                 stats, _ = self.split_view.render(
                     self.session.gpu_scene,
                     self.method(self.method_name),
@@ -561,10 +566,11 @@ class Viewer(WindowConfig):
         grid.tiles = tile_layout(names, viewport, grid.scale.fraction)
         main = self.method(self.method_name)
         methods = {name: self.method(name) for name in names}
-        if self.compare.match:
-            for method in methods.values():
-                if method is not main:
-                    match_glossiness(method, main, self.session.gpu_scene.cube_size)
+        if self.compare.match:  # when one changes, the others follow (as compare matches)
+            cube = self.session.gpu_scene.cube_size
+            self.grid_link.follow(list(methods.values()), main, self._hub(), cube)
+        else:
+            self.grid_link.forget()
         stats, errors = self.grid_view.render(
             self.session.gpu_scene, methods, self.session.camera, grid.tiles, self.ctx.screen
         )
@@ -582,6 +588,11 @@ class Viewer(WindowConfig):
             )
         scale, buffer_height = self._pixel_scale(), self.wnd.buffer_size[1]
         self.grid_labels = draw_labels(grid, scale, buffer_height)
+
+    def _hub(self) -> Method | None:
+        """The ground truth, whose Phong exponent every match goes through (None: none)."""
+        truth = self.grid_metrics.truth
+        return self.method(truth) if truth else None
 
     def _pixel_scale(self) -> tuple[float, float]:
         """Framebuffer pixels per window point (x, y)."""

@@ -64,8 +64,10 @@ def compare_panel(
         imgui.set_item_tooltip("Method B, shown right of the divider and used by the heat map.")
         state.match = imgui.checkbox("match glossiness", state.match)[1]
         imgui.set_item_tooltip(
-            "Keep f_λ, k_d and the look of the blur when switching methods and for B:\n"
-            "LOD bias b <-> Phong exponent N by the fitted mapping (prefilter/glossiness.py)."
+            "Keep f_λ, k_d and the look of the blur when switching methods, for B and in the\n"
+            "grid: when one method's value changes, the others follow through one Phong\n"
+            "exponent N, as compare matches (LOD bias b <-> N by the fitted mapping,\n"
+            "prefilter/glossiness.py; GGX alpha = sqrt(2 / (4N + 2))). Off: each keeps its own."
         )
         if state.match and state.match_note:
             imgui.text_wrapped(state.match_note)
