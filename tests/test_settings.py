@@ -10,6 +10,7 @@ import pytest
 
 from envstudio.errors import OutputFileError
 from envstudio.ui import settings as settings_module
+from envstudio.ui.grid import FRACTIONS, GridState
 from envstudio.ui.settings import ViewerSettings, load_settings, save_settings, settings_path
 
 
@@ -36,6 +37,8 @@ def custom_settings() -> ViewerSettings:
         turntable_speed=-45.0,
         window_size=[640, 480],
         imgui_ini="[Window][Method]\nPos=8,8\nSize=290,200\n",
+        match_glossiness=False,
+        grid={"on": True, "picked": ["mirror", "kautz"], "scale": 2},
     )
 
 
@@ -52,6 +55,30 @@ def test_round_trip(config_dir):
     assert loaded == original
     assert settings_path() == config_dir / "settings.json"
     assert sorted(p.name for p in config_dir.iterdir()) == ["settings.json"]
+
+
+def test_the_grid_is_restored_as_it_was_left():
+    """The methods picked, on, the tile fraction: saved, read back, applied (issue 29)."""
+    methods = ["mirror", "rsibr", "kautz", "reference"]
+    state = GridState()
+    state.picked = ["mirror", "kautz"]
+    state.scale.index = 3
+    state.enter()
+    save_settings(ViewerSettings(grid=state.as_settings(), match_glossiness=False))
+    loaded, warning = load_settings()
+    assert warning is None and loaded.match_glossiness is False
+
+    restored = GridState()
+    assert restored.restore(loaded.grid, methods) == []
+    assert (restored.on, restored.picked, restored.scale.fraction) == (True, state.picked, 1 / 4)
+    assert restored.names(methods) == ["mirror", "kautz"]
+
+    fresh = GridState()  # a method since removed is dropped; bad entries are named, not fatal
+    assert fresh.restore({"picked": ["gone", "rsibr"]}, methods) == []
+    assert (fresh.on, fresh.picked, fresh.scale.index) == (False, ["rsibr"], 0)
+    problems = fresh.restore({"on": "yes", "picked": 3, "scale": len(FRACTIONS)}, methods)
+    assert [p.split(" = ")[0] for p in problems] == ["grid.picked", "grid.scale", "grid.on"]
+    assert ViewerSettings().grid == {} and GridState().restore({}, methods) == []
 
 
 def test_missing_file_gives_defaults_silently(config_dir):

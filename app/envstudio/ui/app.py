@@ -19,7 +19,8 @@ does not want the mouse / keyboard. Shortcuts: 1–9 pick a method, R resets the
 camera, Tab hides and shows the panels, F12 saves a PNG, Escape quits.
 
 Settings (method, parameter values per method, display, scene, environment,
-mesh, camera, rotation, turntable, window size, panel layout) are restored on
+mesh, camera, rotation, turntable, window size, panel layout, glossiness matching,
+the grid: on, the methods picked, the tile fraction) are restored on
 start and saved on exit; command-line options win over them.
 """
 
@@ -342,7 +343,7 @@ class Viewer(WindowConfig):
         self.grid_labels: list[tuple[float, float, float, float]] = []
         # glossiness matching through the ground truth's N, as compare matches
         self.grid_link, self.split_link = GlossinessLink(), GlossinessLink()
-        if options.grid is not None:
+        if options.grid is not None:  # the command line wins over the saved grid
             self.grid.picked = list(options.grid)
             self.grid.enter()
         self.history = FrameHistory()
@@ -383,6 +384,9 @@ class Viewer(WindowConfig):
     def _restore(self, settings: ViewerSettings, start: StartScene) -> list[str]:
         """Apply the saved display, camera, rotation and turntable; returns what was rejected."""
         problems = restore_values(self.session.renderer.display, settings.display)
+        self.compare.match = settings.match_glossiness
+        if self.options.grid is None:
+            problems += self.grid.restore(settings.grid, list(self.methods))
         if start.spec == (settings.scene or DEFAULT_SCENE):
             problems += restore_camera(self.session.camera, settings.camera)
         rotation = settings.object_rotation
@@ -768,6 +772,8 @@ class Viewer(WindowConfig):
         settings.turntable_speed = self.control.turntable_speed
         settings.window_size = list(self.wnd.size)
         settings.imgui_ini = imgui.save_ini_settings_to_memory()
+        settings.match_glossiness = self.compare.match
+        settings.grid = self.grid.as_settings()
         try:
             save_settings(settings)
         except (OSError, UserError) as exc:

@@ -156,6 +156,35 @@ class GridState:
     metrics_note: str | None = None
     press: tuple[float, float] | None = None
 
+    def as_settings(self) -> dict:
+        """What the settings file keeps of the grid: on, the methods picked, the tile scale."""
+        return {"on": self.on, "picked": list(self.picked), "scale": self.scale.index}
+
+    def restore(self, saved: object, methods: list[str]) -> list[str]:
+        """Apply :meth:`as_settings`' table from the settings file; returns what was rejected.
+
+        A method no longer registered is dropped silently (a plugin may be gone).
+        """
+        if not isinstance(saved, dict):
+            return [f"grid = {saved!r}, expected a table"]
+        problems = []
+        picked = saved.get("picked", [])
+        if isinstance(picked, list) and all(isinstance(n, str) for n in picked):
+            self.picked = [name for name in methods if name in picked]
+        else:
+            problems.append(f"grid.picked = {picked!r}, expected a list of method names")
+        scale = saved.get("scale", 0)
+        if isinstance(scale, int) and not isinstance(scale, bool) and 0 <= scale < len(FRACTIONS):
+            self.scale.index = scale
+        else:
+            problems.append(f"grid.scale = {scale!r}, expected 0 to {len(FRACTIONS) - 1}")
+        on = saved.get("on", False)
+        if not isinstance(on, bool):
+            problems.append(f"grid.on = {on!r}, expected true or false")
+        elif on:
+            self.enter()
+        return problems
+
     def names(self, methods: list[str]) -> list[str]:
         """The methods to tile, in ``methods``' order."""
         chosen = [name for name in methods if name in self.picked]

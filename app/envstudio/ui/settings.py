@@ -59,6 +59,11 @@ class ViewerSettings:
         Window width and height.
     imgui_ini : str
         ImGui's panel layout (its .ini text).
+    match_glossiness : bool
+        The Compare panel's *match glossiness* (split screen, grid, switching methods).
+    grid : dict
+        The grid view (ui/grid.py, :meth:`GridState.as_settings`): ``on``, the methods
+        ``picked`` (empty: all) and the tile fraction's ``scale`` index.
     """
 
     method: str = "mirror"
@@ -73,6 +78,8 @@ class ViewerSettings:
     turntable_speed: float = 20.0
     window_size: list = field(default_factory=lambda: [1280, 800])
     imgui_ini: str = ""
+    match_glossiness: bool = True
+    grid: dict = field(default_factory=dict)
 
 
 def settings_path() -> Path:
