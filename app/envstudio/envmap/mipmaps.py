@@ -9,10 +9,14 @@ shaders/envmap/cross_face_mip.glsl, a tent filter whose footprint continues acro
 face edges; :func:`edge_jumps` measures what is left of the seam.
 
 Both need textures with storage for every level: :func:`mipmapped_cube` makes one.
-Compute shaders need OpenGL 4.3.
+Compute shaders need OpenGL 4.3. :func:`write_cube_level` fills any level from the CPU
+(a prefiltered chain's levels, one lobe each), which moderngl's ``TextureCube.write``
+cannot (level 0 only).
 """
 
 from __future__ import annotations
+
+import ctypes
 
 import moderngl
 import numpy as np
@@ -22,9 +26,22 @@ from envstudio.core import cubemap
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
 
-__all__ = ["build_cross_face_mipmaps", "edge_jumps", "mipmapped_cube"]
+__all__ = ["build_cross_face_mipmaps", "edge_jumps", "mipmapped_cube", "write_cube_level"]
 
 _PROGRAM = "envmap/cross_face_mip.glsl"
+_GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
+_GL_RGB = 0x1907
+_GL_FLOAT = 0x1406
+_GL_UNPACK_ALIGNMENT = 0x0CF5
+#: glTexSubImage2D(target, level, x, y, width, height, format, type, pixels)
+_TEX_SUB_IMAGE_2D = ctypes.CFUNCTYPE(
+    None,
+    *(ctypes.c_uint, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int),
+    ctypes.c_uint,
+    ctypes.c_uint,
+    ctypes.c_void_p,
+)
+_PIXEL_STORE_I = ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.c_int)
 
 
 def mipmapped_cube(ctx: moderngl.Context, size: int) -> moderngl.TextureCube:
@@ -46,6 +63,48 @@ def mipmapped_cube(ctx: moderngl.Context, size: int) -> moderngl.TextureCube:
     cube.build_mipmaps()  # allocates levels 1 … log2(n); their content is overwritten later
     cube.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
     return cube
+
+
+def write_cube_level(cube: moderngl.TextureCube, level: int, faces: npt.ArrayLike) -> None:
+    """Write the six faces of one mip level of ``cube`` (with storage for it) from the CPU.
+
+    moderngl's ``TextureCube.write`` reaches level 0 only, so this calls
+    ``glTexSubImage2D`` (OpenGL 1.1) itself, through the loader moderngl loads every GL
+    function from (``ctx.mglo._context``, as ui/imgui_renderer.py's state query). The cube
+    is left bound to texture unit 0.
+
+    Parameters
+    ----------
+    cube
+        Cube map with storage for ``level`` (:func:`mipmapped_cube`).
+    level
+        Mip level k; its faces are m = n >> k texels wide.
+    faces
+        (6, m, m, 3) float linear radiance, core.cubemap layout (OpenGL face order, rows ↔ t).
+    """
+    data = np.ascontiguousarray(faces, dtype=np.float32)
+    m = max(1, cube.size[0] >> level)
+    if data.shape != (6, m, m, 3):
+        raise ValueError(
+            f"level {level} of a {cube.size[0]}² cube takes (6, {m}, {m}, 3), got {data.shape}"
+        )
+    loader = cube.ctx.mglo._context
+    sub_image = _TEX_SUB_IMAGE_2D(loader.load_opengl_function("glTexSubImage2D"))
+    pixel_store = _PIXEL_STORE_I(loader.load_opengl_function("glPixelStorei"))
+    cube.use(location=0)
+    pixel_store(_GL_UNPACK_ALIGNMENT, 1)
+    for face in range(6):
+        sub_image(
+            _GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+            level,
+            0,
+            0,
+            m,
+            m,
+            _GL_RGB,
+            _GL_FLOAT,
+            data[face].ctypes.data,
+        )
 
 
 def build_cross_face_mipmaps(

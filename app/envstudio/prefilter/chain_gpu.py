@@ -29,10 +29,12 @@ takes S · 2^k samples (:func:`level_samples`). Faces under :data:`SPLIT_EDGE` t
 drawn f × f times larger with the samples shared out among each texel's f × f fragments
 (:func:`split_factor`), which the read-back adds up.
 
-The same pass filters split-sum GGX levels (:func:`ggx_lobe_samples`, Karis 2013) from
-a cube on the GPU, as method ``splitsum`` does with :func:`gpu_filtered_cube`: there the
-samples are the reflections of r about GGX half vectors, and each sample carries a weight
-(the shader's second table row), ⟨r, l⟩ normalised over the set.
+The same pass filters one level from a cube source (:func:`gpu_filtered_cube`): split-sum
+GGX levels (:func:`ggx_lobe_samples`, Karis 2013) for method ``splitsum``, where the
+samples are the reflections of r about GGX half vectors and each carries a weight (the
+shader's second table row), ⟨r, l⟩ normalised over the set; or the Phong lobe, as above.
+:func:`gpu_phong_cube_chain` fills a whole mip chain that way, one exponent per level
+(:func:`texel_exponents`), for lookups at a fractional level (method ``parallax``).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ import numpy.typing as npt
 
 from envstudio.core import ggx
 from envstudio.envmap.conversions import latlong_to_cube, upload_latlong
+from envstudio.envmap.mipmaps import mipmapped_cube, write_cube_level
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.prefilter.chain import ChainLevel, gloss_exponents
@@ -56,11 +59,13 @@ __all__ = [
     "SPLIT_EDGE",
     "ggx_lobe_samples",
     "gpu_filtered_cube",
+    "gpu_phong_cube_chain",
     "gpu_prefiltered_chain",
     "level_samples",
     "lobe_samples",
     "source_face",
     "split_factor",
+    "texel_exponents",
 ]
 
 #: Importance samples per texel of level 0 (docs/prefilter/README.md: the error against the
@@ -267,12 +272,13 @@ def gpu_filtered_cube(
     programs: ProgramLibrary,
     source: moderngl.TextureCube,
     size: int,
-    alpha: float,
+    lobe: float,
     samples: int,
     *,
+    kernel: str = "ggx",
     fis_bias: float = FIS_BIAS,
 ) -> npt.NDArray[np.float32]:
-    """One split-sum GGX level (:func:`ggx_lobe_samples`) filtered from a cube on the GPU.
+    """One level filtered from a cube on the GPU: split-sum GGX or the Phong lobe.
 
     Parameters
     ----------
@@ -283,10 +289,13 @@ def gpu_filtered_cube(
         face edge is n_src, a power of two.
     size
         Face edge of the level.
-    alpha
-        GGX α of the level, in (0, 1].
+    lobe
+        GGX α in (0, 1] (``kernel="ggx"``, :func:`ggx_lobe_samples`) or the Phong
+        exponent N > 0 (``kernel="phong"``, :func:`lobe_samples`).
     samples
         S, lattice points per texel.
+    kernel
+        ``"ggx"`` or ``"phong"``.
     fis_bias
         Added to every sample's source level.
 
@@ -295,15 +304,77 @@ def gpu_filtered_cube(
     (6, size, size, 3) float32
         The faces in core.cubemap order.
     """
+    if kernel == "ggx":
+        table, weights = ggx_lobe_samples(lobe, samples, fis_bias)
+    elif kernel == "phong":
+        table = lobe_samples(lobe, samples, fis_bias)
+        weights = np.full(samples, 1.0 / samples, np.float32)
+    else:
+        raise ValueError(f"kernel {kernel!r}: expected 'ggx' or 'phong'")
     n_src = source.size[0]
     program = programs.get(_SHADER, {"SOURCE": 0})
     quad = FullscreenPass(ctx)
     try:
         _bind_source(program, source, float(n_src.bit_length() - 1), math.log2(2.0 / n_src))
-        table, weights = ggx_lobe_samples(alpha, samples, fis_bias)
         return _filter_level(ctx, program, quad, table, weights, size)
     finally:
         quad.release()
+
+
+def texel_exponents(size: int) -> list[float]:
+    """N_k = (n / 2^(k+1))² for the levels k = 0 … log2(n) of an n² cube mip chain.
+
+    A Phong lobe cos^N θ is about σ = N^−½ radians wide (cos^N θ ≈ exp(−N θ²/2)), and a
+    texel of level k, at a face's centre, 2^(k+1)/n: each level holds the lobe one of its
+    texels wide, so its bilinear lookup widens it by about 8 % (the tent's σ, 0.41 texel,
+    in quadrature) and no coarser level could hold it. The level of an exponent is then
+    k(N) = log2(n) − 1 − ½ log2 N, fractional between levels (log-linear in N).
+    """
+    return [float((size / 2.0 ** (k + 1)) ** 2) for k in range(size.bit_length())]
+
+
+def gpu_phong_cube_chain(
+    ctx: moderngl.Context,
+    programs: ProgramLibrary,
+    source: moderngl.TextureCube,
+    size: int,
+    samples: int = DEFAULT_SAMPLES,
+) -> moderngl.TextureCube:
+    """A Phong-prefiltered mip chain of a cube: level k holds N_k of :func:`texel_exponents`.
+
+    Parameters
+    ----------
+    ctx, programs
+        A context (OpenGL 3.3 or later) and its program library.
+    source
+        Cube map with its full mip chain, trilinear (the probe's cube).
+    size
+        Face edge n of level 0, a power of two (at most the source's for a sharp level 0).
+    samples
+        S at level 0 (level k: :func:`level_samples`).
+
+    Returns
+    -------
+    moderngl.TextureCube
+        RGBA32F (alpha 1) with log2(n) + 1 levels, trilinear; the caller releases it.
+    """
+    chain = mipmapped_cube(ctx, size)
+    try:
+        for k, exponent in enumerate(texel_exponents(size)):
+            faces = gpu_filtered_cube(
+                ctx,
+                programs,
+                source,
+                max(1, size >> k),
+                exponent,
+                level_samples(samples, k),
+                kernel="phong",
+            )
+            write_cube_level(chain, k, faces)
+    except BaseException:
+        chain.release()
+        raise
+    return chain
 
 
 def _bind_source(
