@@ -1,20 +1,27 @@
 """Method ``parallax`` (Lagarde and Zanuttini 2012) on the GPU (EGL), its proxy volume, and
 the scene files that declare one: at infinity it is ``mirror``; in the box room it reflects
-the walls where they stand, seen from each point of the ball, not from the probe."""
+the walls where they stand, seen from each point of the ball, not from the probe. Its Phong
+chain: constant in a constant environment, and a level against a brute-force convolution."""
 
 import numpy as np
 import pytest
 
+from envstudio.core import cubemap
+from envstudio.core.fresnel import schlick
 from envstudio.engine.session import RenderSession
+from envstudio.envmap.conversions import read_cube
+from envstudio.envmap.mipmaps import mipmapped_cube, write_cube_level
 from envstudio.io.scene_file import load_scene
+from envstudio.prefilter.chain_gpu import gpu_phong_cube_chain, texel_exponents
+from envstudio.scene.environment import Environment
 from envstudio.scene.proxy import BoxProxy, SphereProxy
 from test_bad_input import assert_one_line_error, run_cli
-from test_render_gl import render, sphere_geometry
+from test_render_gl import render, sphere_geometry, sphere_scene
 from test_static_environment_gl import RADIUS, footprint, room_with_mirror_ball, wall_radiance
 
 SIZE = (64, 64)
 MIRROR = {"fresnel": 1.0, "kd": 0.0}
-SHARP = {**MIRROR, "phong_exponent": 1.0e6}  # the fitted level is below 0 on a 64² cube
+SHARP = {**MIRROR, "phong_exponent": 1.0e6}  # the chain's level is below 0 on a 64² cube
 FAR = 1.0e6
 #: The declared probe: off the ball's centre, so that the cube is captured elsewhere.
 PROBE_OFFSET = np.array([0.9, 0.7, -0.6])
@@ -190,3 +197,63 @@ def test_shipped_room_declares_its_walls_and_studio_needs_no_proxy(gl_ctx):
         assert "no proxy in scene studio" in session.method("parallax").status_line()
     finally:
         session.release()
+
+
+def test_constant_environment_every_chain_level_and_the_image_are_the_constant(gl_ctx):
+    """A box proxy around the sphere (the distance correction spreads N' over the chain's
+    levels): every level of the Phong chain is the constant, the image is eq. 8's
+    ((1 − F) k_d + F) times it, and a second frame does not rebuild the chain."""
+    colour = np.array([0.25, 0.5, 1.0], np.float32)
+    scene = sphere_scene(Environment.constant(colour))
+    scene.proxy = BoxProxy((-2.0, -2.5, -3.0), (4.0, 3.0, 2.0))
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=64)
+    values = {"fresnel": 0.3, "kd": 0.2, "phong_exponent": 20.0}
+    values.update(sh_coefficients="9", lights=0)
+    parallax = session.method("parallax")
+    parallax.values.update(values)
+    session.renderer.display["background"] = False
+    assert "parallax.prefilter" in session.render_offscreen(parallax, SIZE).passes_ms
+    assert "parallax.prefilter" not in session.render_offscreen(parallax, SIZE).passes_ms
+    img = session.read_hdr()
+    chain = parallax._chain
+    assert chain.size == (64, 64)
+    for level in range(7):
+        faces = read_cube(chain, level)[..., :3]
+        np.testing.assert_allclose(faces, np.broadcast_to(colour, faces.shape), rtol=1e-5)
+    hit, normal, view = sphere_geometry(session.camera, SIZE)
+    n_dot_v = np.sum(normal * view, -1)
+    core = hit & (n_dot_v > 0.2)  # away from the silhouette's partly covered pixels
+    fresnel = schlick(0.3, n_dot_v[core])[:, None]
+    np.testing.assert_allclose(img[core], ((1 - fresnel) * 0.2 + fresnel) * colour, rtol=5e-3)
+    session.release()
+
+
+def test_chain_level_matches_a_brute_force_phong_convolution_of_the_cube(gl_ctx, programs):
+    """Level 2 of the Phong chain of a 32² cube (N_2 = 16, 8² faces) against the sum over
+    every source texel of (N + 1)/2π max(⟨r, l⟩, 0)^N L Δω (exact solid angles), over the
+    sum of the kernel's weights, relative to the level's mean: mean error under 0.3 %, worst
+    texel under 2 % (measured: 0.06 % and 0.98 %; a smooth gradient and a lamp 40 times
+    brighter, 2 × 2 texels)."""
+    n, level = 32, 2
+    directions = cubemap.texel_directions(n)
+    radiance = np.stack(
+        [1.0 + 0.5 * directions[..., 0], 1.0 + 0.5 * directions[..., 1], 1.5 - directions[..., 2]],
+        -1,
+    )
+    radiance[4, 10:12, 20:22] = 40.0  # on −Y
+    source = mipmapped_cube(gl_ctx, n)
+    write_cube_level(source, 0, radiance)
+    source.build_mipmaps()
+    chain = gpu_phong_cube_chain(gl_ctx, programs, source, n)
+    exponent = texel_exponents(n)[level]
+    assert exponent == 16.0
+    got = read_cube(chain, level, programs)[..., :3].reshape(-1, 3)
+    targets = cubemap.texel_directions(n >> level).reshape(-1, 3)
+    cosines = np.maximum(targets @ directions.reshape(-1, 3).T, 0.0)
+    weights = (exponent + 1) / (2 * np.pi) * cosines**exponent
+    weights *= cubemap.texel_solid_angles(n).reshape(-1)
+    expected = weights @ radiance.reshape(-1, 3) / weights.sum(1, keepdims=True)
+    error = np.abs(got - expected) / expected.mean()
+    assert error.mean() < 0.003 and error.max() < 0.02, (error.mean(), error.max())
+    for tex in (chain, source):
+        tex.release()

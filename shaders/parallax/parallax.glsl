@@ -4,9 +4,13 @@
 //   lookup   the reflection ray p + t r meets the proxy at x = p + t r
 //            (parallax/proxy.glsl); the cube captured at the probe c is read towards
 //            d = x - c instead of along r
-//   glossy   the cube's box-filtered mip chain at the level that looks like the Phong
-//            lobe of exponent N (prefilter/glossiness.py's fit,
-//            b = W(a + c log2 n + d log2 N)), never finer than the pixel's footprint
+//   glossy   PHONG_CHAIN 1: the probe cube's Phong-prefiltered mip chain
+//            (prefilter/chain_gpu.py gpu_phong_cube_chain, the cube's own face edge n),
+//            level k holding N_k = (n / 2^(k+1))^2, read at the fractional level
+//            log2(n) - 1 - log2(N) / 2 (trilinear: log-linear in N between levels);
+//            PHONG_CHAIN 0: the cube's box-filtered mips at the level that looks like the
+//            lobe by prefilter/glossiness.py's fit, b = W(a + c log2 n + d log2 N);
+//            either never finer than the pixel's footprint
 //   lobe     the distance-based correction: the lobe, an angle about r seen from p,
 //            covers a patch of the proxy about |x - p| / |x - c| as wide seen from c,
 //            so the lookup uses N' = N (|x - c| / |x - p|)^2 (a lobe ~ N^-1/2 wide)
@@ -15,8 +19,12 @@
 // Where the level lies at or below the pixel's footprint (or 0), the lookup is the
 // hardware's own, texture(cube, d): with the proxy at infinity (d parallel to r) and a
 // mirror-like N, exactly `mirror`'s.
+// Both level scales are the cube's: level L of the Phong chain holds a lobe one texel of
+// level L wide, as the box mips' level L has texels as wide as a footprint that picks it.
+// The Phong chain's level 0 holds N_0 = (n / 2)^2; a larger N' is at a level below 0, which
+// the footprint test below always sends to the hardware's lookup.
 // Defines: PROXY (0, 1, 2: parallax/proxy.glsl), DISTANCE_CORRECTION (0/1),
-// SH_COEFFICIENTS (9, 25, 49), LIGHTS (0 .. 32).
+// PHONG_CHAIN (0/1), SH_COEFFICIENTS (9, 25, 49), LIGHTS (0 .. 32).
 #if defined VERTEX_SHADER
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER
@@ -24,19 +32,30 @@
 #include "common/eq8.glsl"
 #include "common/sh_irradiance.glsl"
 #include "parallax/proxy.glsl"
-uniform samplerCube u_environment;
+uniform samplerCube u_environment;  // the probe's cube, box-filtered mips
 uniform vec3 u_probe;
 uniform float u_exponent;
-uniform vec3 u_fit;  // a, c, d of the glossiness fit
 uniform float u_cube_size;
+#if PHONG_CHAIN
+uniform samplerCube u_chain;     // its Phong chain, trilinear, face edge u_cube_size
+#else
+uniform vec3 u_fit;  // a, c, d of the glossiness fit
+#endif
 out vec4 f_color;
 
+#if PHONG_CHAIN
+// The chain level whose lobe is N's (chain_gpu.texel_exponents).
+float glossy_level(float exponent) {
+    return log2(u_cube_size) - 1.0 - 0.5 * log2(exponent);
+}
+#else
 // b = W(u): the trilinear level whose blur is 2^u texels wide (prefilter/glossiness.py).
 float glossy_level(float exponent) {
     float u = u_fit.x + u_fit.y * log2(u_cube_size) + u_fit.z * log2(exponent);
     float k = floor(u);
     return k + (exp2(2.0 * (u - k)) - 1.0) / 3.0;
 }
+#endif
 
 void main() {
     const float PI = 3.14159265358979;
@@ -58,7 +77,11 @@ void main() {
     vec3 dn = normalize(d);
     float level = glossy_level(exponent);
     vec3 sharp = texture(u_environment, dn).rgb;
+#if PHONG_CHAIN
+    vec3 blurred = textureLod(u_chain, dn, level).rgb;
+#else
     vec3 blurred = textureLod(u_environment, dn, level).rgb;
+#endif
     // The footprint of a pixel: the angle d turns through per pixel, in face texels of
     // about 2 / n radians (as kautz's lod_mode=level).
     float turn = max(length(dFdx(dn)), length(dFdy(dn)));

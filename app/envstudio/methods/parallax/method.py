@@ -13,10 +13,18 @@ rather than where it would be seen from the probe (shaders/parallax/parallax.gls
   static environment (GpuScene.static_environment), captured at the reflectors'
   centre; a declared probe elsewhere gets its own capture there, the same one-pass
   cube capture (envmap.dynamic_cube), once per scene change.
-- **Glossy.** The cube's box-filtered mip chain at the level whose blur looks like
-  the Phong lobe of exponent N, by the fitted b ↔ N mapping of
-  prefilter/glossiness.py (as ``kautz`` with ``lod_mode=level``), never finer than
-  the pixel's footprint.
+- **Glossy** (``glossy_chain=phong``, the default). A Phong-prefiltered mip chain of
+  the probe's cube, built on the GPU by filtered importance sampling
+  (prefilter.chain_gpu.gpu_phong_cube_chain, the pass ``splitsum`` uses for GGX) once
+  per probe cube, at the cube's face edge n: level k holds N_k = (n / 2^(k+1))², a lobe
+  one of its texels wide (chain_gpu.texel_exponents), so the lookup reads the
+  fractional level log2(n) − 1 − ½ log2 N' (trilinear: log-linear in N between two
+  levels). Where that lobe is no wider than the pixel's footprint, the lookup is the
+  hardware's own on the probe's cube (so a mirror-like N with the proxy at infinity is
+  exactly ``mirror``).
+  ``glossy_chain=box`` reads the probe cube's box-filtered mips instead, at the level
+  whose blur looks like the lobe by the fitted b ↔ N mapping of prefilter/glossiness.py
+  (``kautz`` with ``lod_mode=level``): nothing to build, about 0.12 levels RMS off.
 - **Distance-based lobe correction** (Lagarde and Zanuttini's, as their course
   notes with de Rousiers restate it, "Moving Frostbite to PBR", 2014): the
   chain was filtered about the probe, but the lobe opens at p. A lobe of angle θ
@@ -32,6 +40,8 @@ objects and no proxy is refused with one line saying how to declare one.
 """
 
 from __future__ import annotations
+
+import time
 
 import moderngl
 import numpy as np
@@ -49,6 +59,7 @@ from envstudio.plugin import (
     set_eq8_uniforms,
     sh_parameters,
 )
+from envstudio.prefilter.chain_gpu import gpu_phong_cube_chain
 from envstudio.prefilter.glossiness import load_model
 from envstudio.scene.proxy import BoxProxy, Proxy, SphereProxy
 
@@ -68,8 +79,8 @@ class ParallaxMethod(Method):
     title = "Parallax-corrected cube map (Lagarde–Zanuttini 2012)"
     summary = (
         "The static cube captured at a probe, each reflection ray intersected with the "
-        "scene's proxy box or sphere before the lookup; glossy from the mip chain with the "
-        "distance-based lobe correction; SH diffuse, Schlick Fresnel."
+        "scene's proxy box or sphere before the lookup; glossy from its Phong-prefiltered "
+        "mip chain with the distance-based lobe correction; SH diffuse, Schlick Fresnel."
     )
     parameters = (
         Parameter(
@@ -79,9 +90,19 @@ class ParallaxMethod(Method):
             1.0,
             1.0e6,
             "N",
-            "Phong exponent of the glossy lobe: the mip level by the fitted b ↔ N mapping "
-            "(a large N is the mirror).",
+            "Phong exponent of the glossy lobe: the chain level whose lobe it is (a large N "
+            "is the mirror).",
             log=True,
+        ),
+        Parameter(
+            "glossy_chain",
+            "choice",
+            "phong",
+            choices=("phong", "box"),
+            rebuild=True,
+            help="phong: the probe cube's Phong-prefiltered chain, one exponent per level "
+            "(built on the GPU once per probe cube); box: its box-filtered mips at the level "
+            "the fitted b ↔ N mapping gives.",
         ),
         Parameter(
             "parallax",
@@ -108,6 +129,10 @@ class ParallaxMethod(Method):
         self._irradiance: ShIrradiance | None = ShIrradiance(ctx, programs)
         self._probe_cube: DynamicCube | None = None
         self._probe_key: tuple | None = None
+        self._chain: moderngl.TextureCube | None = None
+        self._chain_key: tuple | None = None
+        #: Wall time of the last Phong chain build, s (None before the first).
+        self.chain_seconds: float | None = None
         self._note = ""
 
     # -- the scene's proxy and probe -----------------------------------------------------------
@@ -150,46 +175,56 @@ class ParallaxMethod(Method):
 
     def render(self, frame: FrameInputs) -> None:
         proxy, probe = self._proxy_and_probe(frame.scene)
-        cube = self._probe_environment(frame, probe)
+        cube, source_key = self._probe_environment(frame, probe)
+        phong = self.values["glossy_chain"] == "phong"
+        if phong:
+            self._update_chain(frame, cube, source_key)
         self._irradiance.update_static(frame, self.values, "parallax")
-        frame.target.use()  # a capture may have bound its own framebuffer
+        frame.target.use()  # a capture or the chain's passes bound their own framebuffers
         corrected = proxy is not None and self.values["parallax"]
         defines = {
             "PROXY": {"box": 1, "sphere": 2}[proxy.shape] if corrected else 0,
             "DISTANCE_CORRECTION": int(bool(self.values["distance_correction"])),
+            "PHONG_CHAIN": int(phong),
             **ShIrradiance.defines(self.values),
         }
         program = self.programs.get("parallax/parallax.glsl", defines)
         self._irradiance.bind(program)
         cube.use(location=0)
         set_uniform(program, "u_environment", 0)
+        if phong:
+            self._chain.use(location=1)
+            set_uniform(program, "u_chain", 1)
+        else:
+            fit = load_model()
+            set_uniform(program, "u_fit", (fit.a, fit.c, fit.d))
         if isinstance(proxy, BoxProxy):
             set_uniform(program, "u_box_min", tuple(float(v) for v in proxy.minimum))
             set_uniform(program, "u_box_max", tuple(float(v) for v in proxy.maximum))
         elif isinstance(proxy, SphereProxy):
             set_uniform(program, "u_sphere_centre", tuple(float(v) for v in proxy.centre))
             set_uniform(program, "u_sphere_radius", float(proxy.radius))
-        fit = load_model()
         set_uniform(program, "u_probe", tuple(float(v) for v in probe))
         set_uniform(program, "u_exponent", float(self.values["phong_exponent"]))
-        set_uniform(program, "u_fit", (fit.a, fit.c, fit.d))
         set_uniform(program, "u_cube_size", float(cube.size[0]))
         set_eq8_uniforms(program, frame, self.values)
         with frame.timer.measure("parallax"):
             frame.draw_reflectors(program)
 
-    def _probe_environment(self, frame: FrameInputs, probe: np.ndarray) -> moderngl.TextureCube:
-        """The cube seen from the probe: the static environment, or a capture at the probe.
+    def _probe_environment(
+        self, frame: FrameInputs, probe: np.ndarray
+    ) -> tuple[moderngl.TextureCube, tuple]:
+        """The cube seen from the probe, and a key that changes whenever its content does.
 
         The static environment is captured at the reflectors' centre; a probe elsewhere,
         in a scene with local objects, gets its own capture (once per scene change).
         """
         scene = frame.scene
         static = scene.static_environment(frame.timer)
+        key = (id(scene), static.revision, probe.tobytes())
         if not static.captured or np.array_equal(probe, scene.reflector_centre()):
             self._release_probe()
-            return static.cube
-        key = (id(scene), static.revision, probe.tobytes())
+            return static.cube, key
         if self._probe_cube is None or self._probe_cube.size != scene.cube_size:
             self._release_probe()
             self._probe_cube = DynamicCube(self.ctx, self.programs, scene.cube_size)
@@ -200,7 +235,28 @@ class ParallaxMethod(Method):
                 )
                 self._probe_cube.build_mipmaps(cross_face=False)
             self._probe_key = key
-        return self._probe_cube.cube
+        return self._probe_cube.cube, key
+
+    def _update_chain(self, frame: FrameInputs, cube: moderngl.TextureCube, key: tuple) -> None:
+        """Build the Phong chain of the probe's cube (its face edge) when the cube changed."""
+        key = (*key, cube.size[0])
+        if key == self._chain_key:
+            return
+        self._release_chain()
+        start = time.perf_counter()
+        with frame.timer.measure("parallax.prefilter"):
+            self._chain = gpu_phong_cube_chain(self.ctx, self.programs, cube, cube.size[0])
+        self.chain_seconds = time.perf_counter() - start
+        self._chain_key = key
+
+    def bench_notes(self) -> dict:
+        """The Phong chain's build time (wall clock, read-back included) and its levels."""
+        if self._chain is None:
+            return {}
+        return {
+            "chain_build_s": self.chain_seconds,
+            "chain_levels": self._chain.size[0].bit_length(),
+        }
 
     # -- resources ---------------------------------------------------------------------------
 
@@ -210,9 +266,16 @@ class ParallaxMethod(Method):
         self._probe_cube = None
         self._probe_key = None
 
+    def _release_chain(self) -> None:
+        if self._chain is not None:
+            self._chain.release()
+        self._chain = None
+        self._chain_key = None
+
     def release(self) -> None:
-        """Free the SH block and the probe's capture; safe to call twice."""
+        """Free the SH block, the probe's capture and its chain; safe to call twice."""
         if self._irradiance is not None:
             self._irradiance.release()
         self._irradiance = None
         self._release_probe()
+        self._release_chain()
