@@ -65,3 +65,43 @@ def test_grid_weights_are_bilinear_continuous_and_sum_to_one():
     assert np.allclose(w, [0.25, 0.25, 0, 0.25, 0.25, 0])
     path = [_image_weights(space, _eye(a, 0.5 * a)) for a in np.linspace(-5, 25, 3001)]
     assert np.abs(np.diff(path, axis=0)).max() < 0.01
+
+
+def test_a_closed_orbit_blends_across_the_seam_and_covers_every_orbit_camera():
+    """Issue 31: the full orbit's last azimuth blends with its first; ±89° is covered."""
+    from envstudio.methods.pem.bake.views import orbit_views, uncovered
+    from envstudio.scene.camera import OrbitCamera
+
+    base = OrbitCamera(azimuth=25.0, elevation=18.0, distance=3.0)
+    space = orbit_views(base, 30.0, 20.0).describe()
+    azimuths, elevations = np.array(space["azimuths"]), np.array(space["elevations"])
+    assert space["closed"] and len(azimuths) == 12 and 25.0 in azimuths and 18.0 in elevations
+    assert elevations.tolist() == [
+        -89.0,
+        -82.0,
+        -62.0,
+        -42.0,
+        -22.0,
+        -2.0,
+        18.0,
+        38.0,
+        58.0,
+        78.0,
+        89.0,
+    ]
+    # midway between the last azimuth (355°) and the first (25° + 360°): half each
+    b = view_blend(space, _eye(10.0, 18.0))
+    row = int(np.argmin(np.abs(elevations - 18.0))) * len(azimuths)
+    got = {v: w for v, w in zip(b.views, b.weights, strict=True) if w > 0}
+    assert got.keys() == {row, row + 11} and np.allclose(list(got.values()), 0.5)
+    # a sweep all the way round: weights sum to 1 and change by at most one step's worth
+    sweep = np.linspace(-400.0, 400.0, 1601)
+    dense = np.array([_image_weights(space, _eye(a, 18.0)) for a in sweep])
+    assert np.allclose(dense.sum(axis=1), 1.0)
+    assert np.abs(np.diff(dense, axis=0)).max() <= (sweep[1] - sweep[0]) / 30.0 + 1e-9
+    # every orbit camera is inside; an arc leaves the rest outside
+    cams = [OrbitCamera(azimuth=a, elevation=e) for a in (0.0, 200.0) for e in (-89.0, 0.0, 89.0)]
+    assert uncovered(space, cams) == []
+    arc = {**space, "closed": False, "azimuths": [20.0, 30.0], "elevations": [18.0]}
+    assert len(uncovered(arc, [OrbitCamera(azimuth=25.0, elevation=18.0)])) == 0
+    assert len(uncovered(arc, [OrbitCamera(azimuth=200.0, elevation=18.0)])) == 1

@@ -234,6 +234,7 @@ def test_a_truncated_or_foreign_file_keeps_the_shipped_bake(gl_ctx, tmp_path):
     scene = load_scene("room")
     session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
     method = session.method("pem")
+    method.values["coverage"] = "file"  # not the full orbit (test_pem_orbit_gl.py)
     method.prepare(session.gpu_scene)  # the shipped assets/pem/room.pem
     shipped = method.bake
     assert shipped is not None and shipped.scene == "room"

@@ -215,7 +215,7 @@ def load_scene(name_or_path: str | os.PathLike, max_env_width: int | None = None
         target=cam.target,
         fov_y=cam.fov,
     )
-    scene = Scene(environment, nodes, camera, spec.name or path.stem)
+    scene = Scene(environment, nodes, camera, spec.name or path.stem, source=str(path.resolve()))
     if spec.proxy is not None:
         scene.proxy = _proxy(path, spec.proxy, scene)
     return scene

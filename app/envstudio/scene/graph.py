@@ -62,6 +62,9 @@ class Scene:
     #: The proxy volume of a parallax-corrected cube map (scene/proxy.py), None when the
     #: scene declares none.
     proxy: Proxy | None = None
+    #: The scene file it was read from ("" for a scene built otherwise): what a bake of
+    #: the scene loads again (``pem``'s full orbit).
+    source: str = ""
 
     @property
     def label(self) -> str:

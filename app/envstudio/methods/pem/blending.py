@@ -4,7 +4,8 @@ The current camera is mapped into the bake's parameter space: its azimuth (and
 elevation on a 2D grid) about the bake's target. The nearest two samples of an
 arc (four of a grid) are blended with linear (bilinear) weights, so the image
 changes continuously as the camera moves; beyond the ends of an arc that does
-not close, the end sample takes the whole weight (still continuous). Unblended
+not close, the end sample takes the whole weight (still continuous); a closed orbit
+(issue 31) blends its last azimuth with its first. Unblended
 playback (seed 003 §6's table) takes the nearest sample alone.
 
 The PTM (seed 003 §6, Figure 7; issue 31) is a per-texel polynomial in the view
@@ -79,7 +80,9 @@ def _unwrap_near(angle: float, samples: npt.NDArray[np.float64]) -> float:
     return float(angle + 360.0 * np.round((middle - angle) / 360.0))
 
 
-def axis_weights(samples: npt.ArrayLike, value: float, periodic: bool = False) -> tuple:
+def axis_weights(
+    samples: npt.ArrayLike, value: float, periodic: bool = False, closed: bool = False
+) -> tuple:
     """Position of ``value`` along increasing ``samples`` as two indices and weights.
 
     Parameters
@@ -90,14 +93,23 @@ def axis_weights(samples: npt.ArrayLike, value: float, periodic: bool = False) -
         The coordinate to place.
     periodic
         Angles: ``value`` is first moved by a multiple of 360° next to the samples.
+    closed
+        Angles all the way round (implies ``periodic``): past the last sample the
+        cell reaches the first, 360° on.
 
     Returns
     -------
     (i0, i1, w1, u)
         Samples i0 ≤ i1 = min(i0 + 1, n − 1), weight w1 of i1 (1 − w1 of i0), and the
-        fractional index u in [0, n − 1] (clamped at the ends).
+        fractional index u in [0, n − 1] (clamped at the ends). Closed: i1 = (i0 + 1)
+        mod n and u in [0, n).
     """
     s = np.asarray(samples, dtype=np.float64).reshape(-1)
+    if closed and len(s) > 1:
+        value = float(s[0] + np.mod(value - s[0], 360.0))
+        u = float(np.interp(value, np.append(s, s[0] + 360.0), np.arange(len(s) + 1.0)))
+        i0 = min(int(np.floor(u)), len(s) - 1)
+        return i0, (i0 + 1) % len(s), u - i0, u
     if periodic:
         value = _unwrap_near(value, s)
     if len(s) == 1:
@@ -126,7 +138,8 @@ def view_blend(view_space: dict, position: npt.ArrayLike, blend: bool = True) ->
     azimuths = np.asarray(view_space["azimuths"], dtype=np.float64)
     elevations = np.asarray(view_space["elevations"], dtype=np.float64)
     azimuth, elevation = camera_angles(position, view_space["target"])
-    a0, a1, wa, ua = axis_weights(azimuths, azimuth, periodic=True)
+    closed = bool(view_space.get("closed", False))
+    a0, a1, wa, ua = axis_weights(azimuths, azimuth, periodic=True, closed=closed)
     if view_space["kind"] == "grid" and len(elevations) > 1:
         e0, e1, we, ue = axis_weights(elevations, elevation)
     else:
@@ -139,7 +152,7 @@ def view_blend(view_space: dict, position: npt.ArrayLike, blend: bool = True) ->
         (e1 * count + a1, we * wa),
     ]
     if not blend:
-        nearest = (round(ue) * count + round(ua),)
+        nearest = (round(ue) * count + round(ua) % count,)
         return ViewBlend(nearest, (1.0,), (ua, ue))
     if view_space["kind"] != "grid":
         corners = corners[:2]

@@ -8,8 +8,18 @@ from envstudio.plugin import Figure, FigureRequest, Method, ParameterError
 
 
 def _prepared(request: FigureRequest) -> Method:
-    """The session's ``pem`` with ``--param`` applied and its bake loaded."""
+    """The session's ``pem`` with ``--param`` applied and its bake file loaded.
+
+    The figures are of a bake file's views (seed 003's arc), so ``coverage=auto``
+    plays the file here, and the full orbit (``coverage=orbit``) is refused.
+    """
     method = request.method("pem")
+    if method.values["coverage"] == "orbit":
+        raise ParameterError(
+            "pem figures show a .pem file's views: set coverage=file (the full orbit's "
+            "numbers: docs/pem/orbit.md)"
+        )
+    method.values["coverage"] = "file"
     method.prepare(request.session.gpu_scene)
     if method.bake is None:
         raise ParameterError(f"pem: {method.status_line()}")

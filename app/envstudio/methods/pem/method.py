@@ -11,6 +11,14 @@ Figures 1 and 6) and the PTM of Figure 7 (issue 31: the bake's per-view surface
 textures, a per-texel polynomial in the view parameters, methods/pem/blending.py).
 Without a bake for the scene the method shows the static EM and says how to bake
 one.
+
+The full orbit (issue 31, ``coverage``): a scene that ships a bake plays the PEM
+of every view the orbit camera reaches (methods/pem/bake/orbit.py), baked on first
+use into the user cache, nearest the camera first: headless, the views a frame
+blends are baked before it is drawn (a progress bar on a terminal); in the window,
+by a background process (methods/pem/orbit_job.py) while the static EM shows until
+the views around the camera are ready, with the Method panel's progress bar. Only
+the views being blended are on the GPU (methods/pem/resident.py).
 """
 
 from __future__ import annotations
@@ -27,9 +35,13 @@ from envstudio.core.cubemap import faces_to_cross
 from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.pem.bake.orbit import OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
-from envstudio.methods.pem.blending import ViewBlend, ptm_blend, view_blend
+from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
+from envstudio.methods.pem.lookups_gl import GlLookups
+from envstudio.methods.pem.orbit_job import OrbitBakeJob
+from envstudio.methods.pem.resident import ResidentViews
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import (
     FrameInputs,
@@ -58,9 +70,11 @@ class _Loaded:
 
     key: tuple
     path: Path
-    bake: PemBake
-    textures: PemTextures
+    bake: PemBake  # a full orbit's: its geometry, the views are in ``orbit``
+    textures: PemTextures | ResidentViews
     models: list = field(default_factory=list)  # the reflectors' model matrices it was baked for
+    orbit: OrbitStore | None = None
+    job: OrbitBakeJob | None = None  # the window's background bake of the orbit
 
 
 class PemMethod(Method):
@@ -81,6 +95,16 @@ class PemMethod(Method):
             "",
             help="The .pem bake to play; empty: the scene's shipped bake (assets/pem/<scene>.pem).",
             choices=(".pem",),
+        ),
+        Parameter(
+            "coverage",
+            "choice",
+            "auto",
+            help="orbit: every view the orbit camera reaches, baked on first use into the "
+            "user cache (nearest the camera first; in the background in the window); file: "
+            "the views of the .pem; auto: the orbit for a scene that ships a bake and no "
+            "pem is named, else the file.",
+            choices=("auto", "orbit", "file"),
         ),
         Parameter(
             "em_model",
@@ -123,6 +147,11 @@ class PemMethod(Method):
         kd_parameter(0.0, "Diffuse albedo of the diffuse layer, per RGB channel."),
     )
 
+    @staticmethod
+    def orbit_store(source: str) -> OrbitStore:
+        """The full orbit of a scene file (its views baked with the GL lookups)."""
+        return OrbitStore(source, GlLookups)
+
     def __init__(self, ctx: moderngl.Context, programs):
         super().__init__(ctx, programs)
         self._loaded: _Loaded | None = None
@@ -134,6 +163,7 @@ class PemMethod(Method):
         self._moved = False
         self._shown_pem = ""  # the ``pem`` value of what is on show (a failed load returns to it)
         self.last_blend: ViewBlend | None = None
+        self._drawn_static = False  # a full orbit's views about the camera were not there
 
     # -- loading ---------------------------------------------------------------------
 
@@ -145,10 +175,12 @@ class PemMethod(Method):
         return shipped_bake(scene.scene.name), False
 
     def _key(self, scene: GpuScene) -> tuple:
-        """What a loaded bake is valid for: the file asked for, the scene, its meshes."""
+        """What a loaded bake is valid for: the file asked for, the scene, its meshes, the
+        coverage asked for."""
         path, _ = self._requested(scene)
         meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        return (str(path.resolve()) if path.exists() else str(path), id(scene), meshes)
+        where = str(path.resolve()) if path.exists() else str(path)
+        return (where, id(scene), meshes, str(self.values["coverage"]))
 
     def prepare(self, scene: GpuScene) -> None:
         """Load and verify the bake the ``pem`` parameter names (kept while unchanged).
@@ -163,7 +195,14 @@ class PemMethod(Method):
         path, named = self._requested(scene)
         key = self._key(scene)
         if self._loaded is not None and self._loaded.key == key:
-            return
+            return  # a bake shown (:meth:`show`) or loaded for these values stays
+        if self._wants_orbit(scene, named):
+            try:
+                self._prepare_orbit(scene)
+                return
+            except InputFileError:
+                if self.values["coverage"] == "orbit":
+                    raise
         if not named and not path.exists():
             self._release_loaded()
             self._shown_pem = ""
@@ -178,6 +217,48 @@ class PemMethod(Method):
         except InputFileError:
             self.values["pem"] = self._shown_pem  # what is on show stays, and so does its name
             raise
+        self._shown_pem = str(self.values["pem"])
+
+    def _wants_orbit(self, scene: GpuScene, named: bool) -> bool:
+        coverage = str(self.values["coverage"])
+        if coverage == "auto":
+            return (
+                not named and shipped_bake(scene.scene.name).exists() and bool(scene.scene.source)
+            )
+        return coverage == "orbit"
+
+    def _prepare_orbit(self, scene: GpuScene) -> None:
+        """Load the scene's full orbit (its geometry; views come as they are needed).
+
+        Raises
+        ------
+        InputFileError
+            A scene not read from a file, without a reflector, or whose environment or
+            meshes were replaced since (the orbit bakes the scene file's).
+        """
+        meshes = tuple(id(node.mesh) for node in scene.reflectors())
+        key = ("orbit", scene.scene.source, id(scene), meshes)
+        if self._loaded is not None and self._loaded.key == key:
+            return
+        name = scene.scene.name
+        if not scene.scene.source:
+            raise InputFileError(f"scene {name}: not read from a scene file, so no orbit to bake")
+        try:
+            store = self.orbit_store(scene.scene.source)
+        except ValueError as exc:
+            raise InputFileError(f"{scene.scene.source}: {exc}") from None
+        if store.plan.scene.environment.checksum() != scene.scene.environment.checksum():
+            raise InputFileError(
+                f"scene {name}: its environment was replaced; the full orbit bakes the scene "
+                "file's (set coverage=file and bake one with `envstudio bake pem`)"
+            )
+        shell = store.shell()
+        check_bake_for_scene(shell, scene.scene, store.folder)
+        textures = ResidentViews(self.ctx, shell)
+        self._release_loaded()
+        self._missing = self._other_environment = ""
+        models = [np.array(n.model, dtype=np.float64) for n in scene.reflectors()]
+        self._loaded = _Loaded(key, store.folder, shell, textures, models, orbit=store)
         self._shown_pem = str(self.values["pem"])
 
     def missing_input(self) -> str | None:
@@ -299,7 +380,15 @@ class PemMethod(Method):
         else:
             blend = view_blend(bake.view_space, frame.camera_position, bool(self.values["blend"]))
         self.last_blend = blend
-        views = list(blend.views) + [0] * (16 - len(blend.views))
+        views = list(blend.views)
+        if loaded.orbit is not None:
+            slots = self._orbit_slots(frame, blend)
+            if slots is None:  # the window: the views about the camera are still baking
+                set_uniform(program, "u_em_model", MODELS.index("static"))
+                set_uniform(program, "u_use_hull", False)
+                return MODELS.index("static")
+            views = slots
+        views = views + [0] * (16 - len(views))
         weights = list(blend.weights) + [0.0] * (16 - len(blend.weights))
         set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[16]
         set_uniform(program, "u_view_weight", tuple(float(w) for w in weights))
@@ -319,6 +408,46 @@ class PemMethod(Method):
         set_uniform(program, "u_box_hi", bake.box[1])
         set_uniform(program, "u_em_model", model)
         return model
+
+    def _orbit_slots(self, frame: FrameInputs, blend: ViewBlend) -> list[int] | None:
+        """The resident slots of a full orbit's blended views, baking them where needed.
+
+        Headless the missing views are baked now; in the window the background bake
+        is asked for them (and the rest of the orbit after), and None is returned
+        until they are there.
+        """
+        loaded = self._loaded
+        weighted = [v for v, w in zip(blend.views, blend.weights, strict=True) if w > 0.0]
+        weighted = list(dict.fromkeys(weighted or blend.views[:1]))
+        slots = loaded.textures.slots(weighted, loaded.orbit.load)
+        if self.frame_budget_ms is None:
+            if slots is None:
+                self._bake_now(weighted)
+                slots = loaded.textures.slots(weighted, loaded.orbit.load)
+            if slots is None:
+                raise InputFileError(f"{loaded.orbit.parts}: views {weighted} did not bake")
+        else:
+            if loaded.job is None:
+                loaded.job = OrbitBakeJob(loaded.orbit, frame.scene.scene.source)
+            azimuth, elevation = camera_angles(
+                frame.camera_position, loaded.bake.view_space["target"]
+            )
+            loaded.job.request(OrbitCamera(azimuth=azimuth, elevation=elevation), weighted)
+            if slots is None:
+                return None
+        where = dict(zip(weighted, slots, strict=True))
+        return [where.get(v, slots[0]) for v in blend.views]
+
+    def _bake_now(self, views: list[int]) -> None:
+        """Bake a full orbit's ``views`` before the frame (headless), a bar on a terminal."""
+        from tqdm import tqdm
+
+        orbit = self._loaded.orbit
+        with tqdm(
+            unit="view", desc="pem orbit", leave=False, disable=not sys.stderr.isatty()
+        ) as bar:
+            # a child process for the GL lookups: this one holds the frame's context
+            orbit.bake(views, workers=0 if orbit.gl_lookups is None else 1, bar=bar)
 
     def _model_drawn(self) -> str:
         """``em_model``, or ``layered`` where it is ``ptm`` and the bake has no PTM maps."""
@@ -346,7 +475,13 @@ class PemMethod(Method):
                 np.allclose(a, b, atol=1e-9) for a, b in zip(now, self._loaded.models, strict=True)
             )
         program = self.programs.get("pem/pem.glsl", texgen_defines(str(self.values["texgen"])))
-        self._bind(program, frame)
+        model = self._bind(program, frame)
+        self._drawn_static = (
+            self._loaded is not None
+            and self._loaded.orbit is not None
+            and MODELS[model] == "static"
+            and self.values["em_model"] != "static"
+        )
         frame.target.use()  # the static EM's capture may have bound its own framebuffer
         with frame.timer.measure("pem"):
             for part, gpu_node in enumerate(frame.scene.reflectors()):
@@ -357,9 +492,33 @@ class PemMethod(Method):
 
     # -- the panel -------------------------------------------------------------------------
 
+    def _orbit_status(self) -> str:
+        """The full orbit's progress: views baked, time left, what is on show."""
+        loaded = self._loaded
+        orbit, job = loaded.orbit, loaded.job
+        done = len(job.done() if job is not None else orbit.done())
+        line = f"full orbit: {done} of {orbit.total} views baked"
+        left = None if job is None else job.seconds_left()
+        if job is not None and job.running:
+            line += " (baking nearest the camera first" + (
+                f", about {left / 60:.0f} min left)" if left is not None else ")"
+            )
+        if self.last_blend is not None and self._drawn_static:
+            return line + "; the static EM shows until the views around the camera are baked"
+        return line + f"; {loaded.textures.megabytes:.0f} MB resident"
+
+    def progress(self) -> float | None:
+        """The full orbit's bake while it runs in the background (None otherwise)."""
+        loaded = self._loaded
+        if loaded is None or loaded.job is None or not loaded.job.running:
+            return None
+        return len(loaded.job.done()) / loaded.orbit.total
+
     def status_line(self) -> str:
         if self._missing:
             return self._missing
+        if self._loaded is not None and self._loaded.orbit is not None and not self._moved:
+            return self._orbit_status()
         if self._other_environment and self._loaded is not None:
             return self._other_environment
         if self._loaded is None or self.last_blend is None:
@@ -411,12 +570,15 @@ class PemMethod(Method):
             return []
         bake = self._loaded.bake
         view = self.last_blend.views[int(np.argmax(self.last_blend.weights))]
+        maps = self._view_maps(view)
+        if maps is None:
+            return []
         images, labels = [], []
         for model in ("distant", "local", "sphere"):
-            images.append(bake.maps[model][0][view, 0][..., :3])
+            images.append(maps[model][0][0][..., :3])
             labels.append(f"{model}, level 0 (view {view}, {bake.parts[0]})")
-        for level in range(1, min(5, len(bake.maps["distant"]))):
-            images.append(bake.maps["distant"][level][view, 0])
+        for level in range(1, min(5, len(maps["distant"]))):
+            images.append(maps["distant"][level][0])
             labels.append(f"distant, level {level}")
         crosses = [upright(to_ldr(faces_to_cross(im), exposure, tonemap)) for im in images]
         if [t.size for t in self._thumbnails] != [c.shape[1::-1] for c in crosses]:
@@ -426,6 +588,13 @@ class PemMethod(Method):
             alpha = np.full((*rgb.shape[:2], 1), 255, np.uint8)
             texture.write(np.ascontiguousarray(np.concatenate([rgb, alpha], axis=-1)).tobytes())
         return list(zip(labels, self._thumbnails, strict=True))
+
+    def _view_maps(self, view: int) -> dict[str, list[np.ndarray]] | None:
+        """One view's maps, model → levels of (P, 6, n_k, n_k, C) (None: not baked yet)."""
+        loaded = self._loaded
+        if loaded.orbit is not None:
+            return loaded.orbit.load(view)
+        return {m: [level[view] for level in levels] for m, levels in loaded.bake.maps.items()}
 
     def report_extras(self, session, out_dir: Path) -> list[ReportExtra]:
         """Seed 003 Figures 6–7 and §6's wobble, measured (methods/pem/offmanifold.py).
@@ -437,7 +606,7 @@ class PemMethod(Method):
         """
         from envstudio.methods.pem import offmanifold
 
-        if self.bake is None:
+        if self.bake is None or self._loaded.orbit is not None:  # the orbit: docs/pem/orbit.md
             return []
         saved = (session.camera.azimuth, session.camera.elevation, session.camera.distance)
         saved_target, saved_fov = session.camera.target.copy(), session.camera.fov_y
@@ -504,6 +673,8 @@ class PemMethod(Method):
 
     def _release_loaded(self) -> None:
         if self._loaded is not None:
+            if self._loaded.job is not None:
+                self._loaded.job.stop()
             self._loaded.textures.release()
             self._loaded = None
 

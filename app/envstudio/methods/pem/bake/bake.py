@@ -68,12 +68,16 @@ from envstudio.scene.camera import OrbitCamera
 
 __all__ = [
     "DASK_CONNECT_TIMEOUT",
+    "BakePlan",
     "BakeReport",
     "ViewTask",
     "bake_view",
+    "load_part",
     "neighbours",
     "part_keys",
+    "part_name",
     "parts_folder",
+    "plan_bake",
     "run_bake",
 ]
 
@@ -386,7 +390,7 @@ def _save_part(path: Path, key: str, task: ViewTask, result: dict) -> None:
             np.savez(f, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)
 
 
-def _load_part(path: Path, key: str, task: ViewTask) -> dict | None:
+def load_part(path: Path, key: str, task: ViewTask) -> dict | None:
     """The part's arrays if it is readable, of this bake and view, and intact; else None."""
     try:
         with np.load(path, allow_pickle=False) as data:
@@ -444,6 +448,116 @@ def _map_dask(tasks, client):
         raise
 
 
+@dataclass
+class BakePlan:
+    """What a bake will do (:func:`plan_bake`), before any work.
+
+    Attributes
+    ----------
+    scene : Scene
+        The loaded scene.
+    tracer : SceneTracer
+        Its tracer (built here: a scene without a reflector is refused first).
+    space : ViewSpace
+        The parameter space.
+    parameters : dict
+        The bake's parameters as stored in its file.
+    key : str
+        The identity its parts are saved under (scene file, environment pixels,
+        parameters, view space).
+    tasks : list of ViewTask
+        One per view, in view order.
+    models : tuple of str
+        The maps inferred.
+    coupling : float
+        γ of coupled inference.
+    """
+
+    scene: object
+    tracer: SceneTracer
+    space: ViewSpace
+    parameters: dict
+    key: str
+    tasks: list
+    models: tuple
+    coupling: float
+
+
+def plan_bake(
+    scene, views, size=256, samples=4, em_size=64, smoothness=1e-3, seed=0, tie=None,
+    lod_bias=LOD_BIAS, lookups="auto", gl_lookups=None, ptm=True, coupling=0.0, coupling_passes=2,
+    probe=True,
+) -> BakePlan:  # fmt: skip
+    """The tasks, parameters and key of a bake (:func:`run_bake`'s arguments; no work done).
+
+    ``probe`` False takes ``lookups`` (``gl`` or ``cpu``) as it is, without making a
+    GL context to see whether one can be made: a process that holds a context (the
+    viewer) must not make and release another.
+
+    Raises
+    ------
+    ValueError
+        A scene without a reflector, ``gl`` lookups without a context, a negative
+        coupling weight or no coupled pass for a positive one.
+    """
+    scene_path = resolve_scene(scene)
+    scene_obj = load_scene(scene_path)
+    tracer = SceneTracer(scene_obj)  # raises ValueError for a scene without a reflector
+    space = views if isinstance(views, ViewSpace) else views(scene_obj.camera)
+    tie = float(smoothness if tie is None else tie)
+    lookups = resolve_lookups(lookups, gl_lookups) if probe else lookups
+    coupling = float(coupling)
+    if not (np.isfinite(coupling) and coupling >= 0.0):
+        raise ValueError(f"coupling {coupling:g}: expected a weight ≥ 0")
+    if coupling and int(coupling_passes) < 1:
+        raise ValueError(f"coupling passes {coupling_passes}: expected at least 1")
+    models = MODELS if ptm else REQUIRED
+    parameters = {
+        "size": int(size),
+        "samples": int(samples),
+        "em_size": int(em_size),
+        "levels": len(mip_sizes(int(em_size))),
+        "smoothness": float(smoothness),
+        "tie": tie,
+        "lod_bias": float(lod_bias),
+        "seed": int(seed),
+        "bounces": TRACE_BOUNCES,
+        "geometries": {"distant": "box", "local": "ellipsoid", "sphere": "infinity"},
+        "lookup": "pixel centre, trilinear (bake/pem/lookups.py)",
+        "lookups": lookups,
+        "hull": "convex hull of all reflector parts",
+        "environment": scene_obj.environment.checksum(),
+    }
+    if coupling:  # not in seed 003 (issue 31); absent: the independent bake of before
+        parameters["coupling"] = coupling
+        parameters["coupling_passes"] = int(coupling_passes)
+    key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
+    tasks = [
+        ViewTask(
+            str(scene_path.resolve()),
+            i,
+            float(c.azimuth),
+            float(c.elevation),
+            float(c.distance),
+            tuple(float(t) for t in c.target),
+            float(c.fov_y),
+            int(size),
+            int(samples),
+            int(em_size),
+            float(smoothness),
+            int(seed),
+            tie,
+            float(lod_bias),
+            lookups,
+            gl_lookups if lookups == "gl" else None,
+            models,
+            coupling,
+        )
+        for i, c in enumerate(space.cameras())
+    ]
+    return BakePlan(scene_obj, tracer, space, parameters, key, tasks, models, coupling)
+
+
 def run_bake(
     scene: str | os.PathLike,
     views: ViewSpace | Callable[[OrbitCamera], ViewSpace],
@@ -466,6 +580,9 @@ def run_bake(
     ptm: bool = True,
     coupling: float = 0.0,
     coupling_passes: int = 2,
+    only: list[int] | None = None,
+    assemble: bool = True,
+    probe: bool = True,
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -518,6 +635,15 @@ def run_bake(
         γ of coupled inference and the coupled passes after the independent one
         (module docstring; not in seed 003). γ = 0: no coupled pass, and the
         parameters, parts and file of an uncoupled bake.
+    only
+        Bake just these views, in this order (the parts of the others are left as
+        they are); None: every view.
+    assemble
+        Write ``output`` and remove the parts folder once every view is there.
+        False: stop when the views are saved, the parts folder being the bake (a
+        full-orbit PEM's views, :mod:`.orbit`); ``report.bake`` is then None.
+    probe
+        As :func:`plan_bake`.
 
     Returns
     -------
@@ -525,61 +651,23 @@ def run_bake(
     """
     start = time.perf_counter()
     output = check_output_path(output)
-    scene_path = resolve_scene(scene)
-    scene_obj = load_scene(scene_path)
-    tracer = SceneTracer(scene_obj)  # raises ValueError for a scene without a reflector
-    space = views if isinstance(views, ViewSpace) else views(scene_obj.camera)
-    tie = float(smoothness if tie is None else tie)
-    lookups = resolve_lookups(lookups, gl_lookups)
-    coupling = float(coupling)
-    if not (np.isfinite(coupling) and coupling >= 0.0):
-        raise ValueError(f"coupling {coupling:g}: expected a weight ≥ 0")
-    if coupling and int(coupling_passes) < 1:
-        raise ValueError(f"coupling passes {coupling_passes}: expected at least 1")
-    models = MODELS if ptm else REQUIRED
-    parameters = {
-        "size": int(size),
-        "samples": int(samples),
-        "em_size": int(em_size),
-        "levels": len(mip_sizes(int(em_size))),
-        "smoothness": float(smoothness),
-        "tie": tie,
-        "lod_bias": float(lod_bias),
-        "seed": int(seed),
-        "bounces": TRACE_BOUNCES,
-        "geometries": {"distant": "box", "local": "ellipsoid", "sphere": "infinity"},
-        "lookup": "pixel centre, trilinear (bake/pem/lookups.py)",
-        "lookups": lookups,
-        "hull": "convex hull of all reflector parts",
-        "environment": scene_obj.environment.checksum(),
-    }
-    if coupling:  # not in seed 003 (issue 31); absent: the independent bake of before
-        parameters["coupling"] = coupling
-        parameters["coupling_passes"] = int(coupling_passes)
-    key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
-    tasks = [
-        ViewTask(
-            str(scene_path.resolve()),
-            i,
-            float(c.azimuth),
-            float(c.elevation),
-            float(c.distance),
-            tuple(float(t) for t in c.target),
-            float(c.fov_y),
-            int(size),
-            int(samples),
-            int(em_size),
-            float(smoothness),
-            int(seed),
-            tie,
-            float(lod_bias),
-            lookups,
-            gl_lookups if lookups == "gl" else None,
-            models,
-            coupling,
-        )
-        for i, c in enumerate(space.cameras())
-    ]
+    plan = plan_bake(
+        scene, views, size, samples, em_size, smoothness, seed, tie, lod_bias, lookups,
+        gl_lookups, ptm, coupling, coupling_passes, probe,
+    )  # fmt: skip
+    scene_obj, space, parameters, key, tasks = (
+        plan.scene,
+        plan.space,
+        plan.parameters,
+        plan.key,
+        plan.tasks,
+    )
+    models, coupling = plan.models, plan.coupling
+    tracer = plan.tracer
+    if only is not None:
+        if coupling or assemble:
+            raise ValueError("a subset of the views is baked uncoupled and not assembled")
+        tasks = [tasks[i] for i in only]
     folder = parts_folder(output)
     report = BakeReport(bake=None, path=output)  # type: ignore[arg-type]
     keys = part_keys(int(em_size), models)
@@ -605,6 +693,9 @@ def run_bake(
                     connect_timeout, dask_workers, first=False,
                 )
             )  # fmt: skip
+    report.seconds = time.perf_counter() - start
+    if not assemble:
+        return report
     bake = _assemble(scene_obj, tracer, space, parameters, tasks, results, int(em_size), models)
     save_pem(output, bake)
     shutil.rmtree(folder, ignore_errors=True)
@@ -613,7 +704,7 @@ def run_bake(
     return report
 
 
-def _part_name(task: ViewTask) -> str:
+def part_name(task: ViewTask) -> str:
     """``view-NNNNN.npz`` (independent pass), ``view-NNNNN-pass-K.npz`` (coupled pass K)."""
     suffix = f"-pass-{task.coupling_pass}" if task.coupling_pass else ""
     return f"view-{task.index:05d}{suffix}.npz"
@@ -656,7 +747,7 @@ def _run_pass(
     """One pass over every view: reuse saved parts, bake the rest, save each as it ends."""
     results: dict[int, dict] = {}
     for task in tasks:
-        part = _load_part(folder / _part_name(task), key, task)
+        part = load_part(folder / part_name(task), key, task)
         if part is not None:
             results[task.index] = part
             if first:
@@ -678,7 +769,7 @@ def _run_pass(
         else:
             finished = _map_local(todo, max(0, min(count, len(todo))))
         for task, result in finished:
-            _save_part(folder / _part_name(task), key, task, result)
+            _save_part(folder / part_name(task), key, task, result)
             results[task.index] = {k: result[k] for k in keys}
             if first:
                 report.baked.append(task.index)

@@ -1,0 +1,280 @@
+"""A scene's full-orbit PEM: every view a user can orbit to, baked on demand (issue 31).
+
+Seed 003 bakes a 100-view arc; a viewer's orbit camera reaches every azimuth and
+elevations to ±89°. :class:`OrbitStore` is the PEM of the whole orbit
+(:func:`~.views.orbit_views` at :data:`ORBIT_STEP`, the bake parameters of the
+shipped arc bake) kept as a parts folder in the user cache: each view is one
+verified part file (:mod:`.bake`'s resume format), written atomically as soon as
+it is baked, under a key of the scene file, its environment's pixels, the
+parameters and the view space. Views are baked when they are first needed,
+nearest the camera first (:meth:`OrbitStore.bake`; in the viewer a background
+process, methods/pem/orbit_job.py), and never assembled into one ``.pem``: at
+10° spacing the orbit is 612 views, about 2 GB as float32 maps, so playback
+reads the few views it blends from their parts (methods/pem/resident.py).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from envstudio.io.atomic import atomic_path
+from envstudio.methods.pem.bake.bake import (
+    BakeReport,
+    load_part,
+    part_name,
+    parts_folder,
+    plan_bake,
+    run_bake,
+)
+from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
+from envstudio.methods.pem.bake.infer import distant_box, local_ellipsoid
+from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.methods.pem.bake.views import orbit_views
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = ["ORBIT_BAKE", "ORBIT_STEP", "OrbitStore", "nearest_first", "orbit_cache_dir"]
+
+#: (azimuth, elevation) spacing of the orbit's views in degrees, chosen by measurement:
+#: the coarsest whose playback midway between samples is within 1 dB of the 2× denser
+#: grid's (docs/pem/orbit.md).
+ORBIT_STEP = (10.0, 10.0)
+
+#: The orbit's bake parameters: those of the shipped arc bake (assets/pem/room.pem), the
+#: three maps of seed 003 (no PTM: Figure 7's comparison is made on the arc).
+ORBIT_BAKE = {"size": 256, "samples": 4, "em_size": 64, "ptm": False}
+
+
+def orbit_cache_dir() -> Path:
+    """``$ENVSTUDIO_CACHE_DIR/pem``, else the platform's user cache (as rsibr's bakes)."""
+    import platformdirs
+
+    base = os.environ.get("ENVSTUDIO_CACHE_DIR") or platformdirs.user_cache_dir("envstudio")
+    return Path(base) / "pem"
+
+
+def nearest_first(space: dict, camera: OrbitCamera, views: list[int] | None = None) -> list[int]:
+    """Views ordered by the angle between their direction and the camera's, smallest first.
+
+    Parameters
+    ----------
+    space
+        ``ViewSpace.describe()``.
+    camera
+        The camera (its azimuth and elevation; the distance is not compared).
+    views
+        The view indices to order; None: all.
+
+    Returns
+    -------
+    list of int
+    """
+    az = np.radians(np.asarray(space["azimuths"], dtype=np.float64))
+    el = np.radians(np.asarray(space["elevations"], dtype=np.float64))
+    e, a = np.meshgrid(el, az, indexing="ij")  # elevation-major, as the views
+    directions = np.stack([np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a)], -1)
+    ca, ce = np.radians(camera.azimuth), np.radians(camera.elevation)
+    d = np.array([np.cos(ce) * np.sin(ca), np.sin(ce), np.cos(ce) * np.cos(ca)])
+    cosines = directions.reshape(-1, 3) @ d
+    chosen = np.arange(len(cosines)) if views is None else np.asarray(views, dtype=np.int64)
+    return [int(v) for v in chosen[np.argsort(-cosines[chosen], kind="stable")]]
+
+
+class OrbitStore:
+    """The full-orbit PEM of one scene in the user cache (module docstring).
+
+    Parameters
+    ----------
+    scene
+        Shipped scene name or TOML scene file.
+    gl_lookups
+        The GL lookups' class (methods/pem/lookups_gl.py), as :func:`~.bake.run_bake`;
+        None bakes with CPU lookups (another orbit: the lookups are part of its key).
+    step
+        (azimuth, elevation) spacing, degrees.
+    root
+        The cache folder; default :func:`orbit_cache_dir`.
+    parameters
+        The bake's size, samples, em_size and ptm (default :data:`ORBIT_BAKE`).
+
+    Attributes
+    ----------
+    folder : Path
+        ``root/orbit-<scene>-<key>``: ``orbit.pem.parts/`` (the views) and
+        ``shell.npz`` (the geometry playback needs).
+    total : int
+        Views of the orbit.
+    """
+
+    def __init__(
+        self,
+        scene: str,
+        gl_lookups: type | None = None,
+        step: tuple[float, float] = ORBIT_STEP,
+        root: Path | None = None,
+        parameters: dict | None = None,
+    ):
+        parameters = dict(ORBIT_BAKE if parameters is None else parameters)
+        self.parameters = parameters
+        self.scene_name = scene
+        self.gl_lookups = gl_lookups
+        self.step = step
+        self.plan = plan_bake(
+            scene,
+            lambda camera: orbit_views(camera, *step),
+            lookups="cpu" if gl_lookups is None else "gl",
+            gl_lookups=gl_lookups,
+            probe=False,
+            **parameters,
+        )
+        self.space = self.plan.space.describe()
+        self.total = len(self.plan.tasks)
+        name = f"orbit-{self.plan.scene.name}-{self.plan.key[:16]}"
+        self.folder = (orbit_cache_dir() if root is None else Path(root)) / name
+        self.output = self.folder / "orbit.pem"
+        self.parts = parts_folder(self.output)
+        self._shell: PemBake | None = None
+
+    # -- what is baked -----------------------------------------------------------------------
+
+    def done(self) -> set[int]:
+        """Indices of the views whose part file is there (not yet verified)."""
+        if not self.parts.is_dir():
+            return set()
+        names = (p.name for p in self.parts.glob("view-*.npz"))
+        return {int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()}
+
+    def load(self, view: int) -> dict[str, list[np.ndarray]] | None:
+        """The maps of ``view``, or None where its part is missing, foreign or damaged.
+
+        Returns
+        -------
+        dict or None
+            Model → list over levels k of (P, 6, n_k, n_k, C) float32.
+        """
+        task = self.plan.tasks[view]
+        part = load_part(self.parts / part_name(task), self.plan.key, task)
+        if part is None:
+            return None
+        levels = len(self.shell().maps["distant"])
+        return {m: [part[f"{m}_{k}"] for k in range(levels)] for m in self.plan.models}
+
+    def bake(self, views: list[int], workers: int | None = 1, bar=None) -> BakeReport:
+        """Bake ``views`` (those already saved are verified and kept), in this order.
+
+        Parameters
+        ----------
+        views
+            View indices.
+        workers
+            Processes (0: this process, whose GL context the lookups would share;
+            the default bakes in one child process).
+        bar
+            A tqdm bar over the views.
+        """
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return run_bake(
+            self.scene_name,
+            lambda camera: orbit_views(camera, *self.step),
+            self.output,
+            lookups="cpu" if self.gl_lookups is None else "gl",
+            gl_lookups=self.gl_lookups,
+            workers=workers,
+            bar=bar,
+            only=list(views),
+            assemble=False,
+            probe=False,
+            **self.parameters,
+        )
+
+    # -- what playback needs ---------------------------------------------------------------------
+
+    def shell(self) -> PemBake:
+        """The orbit as a bake without views: its geometry, parameters and view space.
+
+        ``maps`` holds one zero view (the playback's slots replace it), ``cameras``
+        every view's angles. Computed once (the reflectors' ellipsoids need the
+        tracer) and kept in ``shell.npz``.
+        """
+        if self._shell is None:
+            self._shell = self._read_shell() or self._write_shell()
+        return self._shell
+
+    def _empty_maps(self) -> dict[str, list[np.ndarray]]:
+        n, parts = int(self.parameters["em_size"]), len(self.plan.tracer.part_names)
+        channels = {"distant": 3, "local": 4, "sphere": 3, "ptm": 3}
+        levels = int(self.plan.parameters["levels"])
+        shapes = [(1, parts, 6, n >> k, n >> k) for k in range(levels)]
+        return {
+            m: [np.zeros((*shape, channels[m]), np.float32) for shape in shapes]
+            for m in self.plan.models
+        }
+
+    def _shell_of(self, geometry: dict) -> PemBake:
+        cameras = np.array([[t.azimuth, t.elevation] for t in self.plan.tasks], np.float64)
+        return PemBake(
+            scene=self.plan.scene.name,
+            view_space=self.space,
+            parts=list(self.plan.tracer.part_names),
+            parameters=self.plan.parameters,
+            maps=self._empty_maps(),
+            hull=[np.asarray(h, bool) for h in geometry["hull"]],
+            mesh_checks=[mesh_check(node) for node in self.plan.scene.reflectors()],
+            psnr={},
+            playback_psnr={},
+            cameras=cameras,
+            box=np.asarray(geometry["box"], np.float64),
+            origins=np.asarray(geometry["origins"], np.float64),
+            ellipsoids=np.asarray(geometry["ellipsoids"], np.float64),
+        )
+
+    def _read_shell(self) -> PemBake | None:
+        path = self.folder / "shell.npz"
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if str(data["key"]) != self.plan.key:
+                    return None
+                parts = len(self.plan.tracer.part_names)
+                geometry = {
+                    "box": data["box"],
+                    "origins": data["origins"],
+                    "ellipsoids": data["ellipsoids"],
+                    "hull": [data[f"hull_{p}"] for p in range(parts)],
+                }
+        except (OSError, ValueError, KeyError, EOFError):
+            return None
+        return self._shell_of(geometry)
+
+    def _write_shell(self) -> PemBake:
+        tracer, scene = self.plan.tracer, self.plan.scene
+        box = distant_box(scene)
+        local = [local_ellipsoid(tracer, p) for p in range(len(tracer.part_names))]
+        geometry = {
+            "box": np.stack([box.lo, box.hi]),
+            "origins": np.array([o for _, o in local], np.float64),
+            "ellipsoids": np.array([[g.centre, g.radii] for g, _ in local], np.float64),
+            "hull": reflector_hulls(scene),
+        }
+        self.folder.mkdir(parents=True, exist_ok=True)
+        hulls = {f"hull_{p}": np.asarray(h, bool) for p, h in enumerate(geometry["hull"])}
+        with atomic_path(self.folder / "shell.npz") as tmp:
+            with open(tmp, "wb") as f:
+                np.savez(
+                    f,
+                    key=np.array(self.plan.key),
+                    box=geometry["box"],
+                    origins=geometry["origins"],
+                    ellipsoids=geometry["ellipsoids"],
+                    **hulls,
+                )
+        return self._shell_of(geometry)
+
+    def describe(self) -> str:
+        """One line: the orbit's grid and where it is kept."""
+        el = self.space["elevations"]
+        return (
+            f"{self.total} views ({len(self.space['azimuths'])} azimuths × {len(el)} elevations "
+            f"{el[0]:g}°…{el[-1]:g}°, {self.step[0]:g}° × {self.step[1]:g}°) in {self.folder}"
+        )

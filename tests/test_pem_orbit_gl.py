@@ -1,0 +1,135 @@
+"""The full-orbit PEM (issue 31): views baked on demand, a few resident, resumable.
+
+The orbit's views are baked at tiny sizes with the CPU lookups (in this process) on
+a 30° grid; what is checked is the machinery: which views are baked, that playback
+from resident slots is the playback of the same maps as a bake file, and that a
+background bake stopped midway leaves only whole parts and resumes.
+"""
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from envstudio.engine.session import RenderSession
+from envstudio.io.scene_file import load_scene
+from envstudio.methods.pem.atlas import flat_maps
+from envstudio.methods.pem.bake.orbit import OrbitStore
+from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.methods.pem.orbit_job import OrbitBakeJob
+from envstudio.methods.pem.resident import ResidentViews
+
+TINY = {"size": 16, "samples": 1, "em_size": 8, "ptm": False}
+STEP = (30.0, 30.0)
+R = 40
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path))
+    return tmp_path
+
+
+def _random_maps(shell, view):
+    rng = np.random.default_rng(view)
+    return {
+        m: [rng.uniform(0.0, 1.0, level.shape[1:]).astype(np.float32) for level in levels]
+        for m, levels in shell.maps.items()
+    }
+
+
+def test_resident_slots_hold_exactly_the_views_asked_for_least_recent_out(gl_ctx, cache):
+    shell = OrbitStore("room", None, STEP, parameters=TINY).shell()
+    resident = ResidentViews(gl_ctx, shell, slots=3)
+    load = lambda v: _random_maps(shell, v)  # noqa: E731
+    assert resident.slots([0, 1], load) == [0, 1] and resident.slots([2], load) == [2]
+    assert resident.slots([1, 3], load) == [1, 0]  # 0 was the least recently used
+    assert resident.slots([7], lambda v: None) is None  # not baked: nothing moved
+    texels = len(flat_maps([a[None] for a in _random_maps(shell, 0)["distant"]]))
+    for model, texture in resident.atlases.items():
+        atlas = np.frombuffer(texture.read(), np.float32).reshape(-1, 4)
+        for view, slot in resident.resident.items():
+            want = flat_maps([a[None] for a in _random_maps(shell, view)[model]])
+            assert np.array_equal(atlas[slot * texels : (slot + 1) * texels], want)
+    resident.release()
+
+
+def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(gl_ctx, cache):
+    scene = load_scene("room")
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.orbit_store = lambda source: OrbitStore(source, None, STEP, parameters=TINY)
+    method.values.update({"kd": 0.0, "fresnel_layer": False})
+    session.renderer.display["background"] = False
+    session.camera.azimuth, session.camera.elevation = 25.0 + 12.0, 18.0 + 9.0  # in a cell
+    session.render_offscreen(method, (R, R))
+    orbit_image = session.read_hdr().astype(np.float64)
+    store, blend = method._loaded.orbit, method.last_blend
+    assert len(blend.views) == 4 and store.done() == set(blend.views)
+    assert f"4 of {store.total} views baked" in method.status_line()
+    stamps = {p: p.stat().st_mtime_ns for p in store.parts.iterdir()}
+    session.render_offscreen(method, (R, R))  # baked once: nothing is baked again
+    assert {p: p.stat().st_mtime_ns for p in store.parts.iterdir()} == stamps
+    # the same four views' maps as a 2 x 2 grid bake file, played the file's way
+    shell, count = store.shell(), len(store.space["azimuths"])
+    a0, e0 = 0, int(np.searchsorted(store.space["elevations"], 27.0)) - 1  # the cell's corner
+    a1, e1 = a0 + 1, e0 + 1
+    views = [e * count + a for e in (e0, e1) for a in (a0, a1)]
+    assert set(views) == set(blend.views)
+    maps = [store.load(v) for v in views]
+    grid = {
+        **store.space,
+        "azimuths": [store.space["azimuths"][a] for a in (a0, a1)],
+        "elevations": [store.space["elevations"][e] for e in (e0, e1)],
+    }
+    del grid["closed"]
+    bake = PemBake(
+        scene="room",
+        view_space=grid,
+        parts=shell.parts,
+        parameters=shell.parameters,
+        maps={
+            m: [np.stack(level) for level in zip(*(v[m] for v in maps), strict=True)]
+            for m in maps[0]
+        },
+        hull=shell.hull,
+        mesh_checks=shell.mesh_checks,
+        psnr={},
+        playback_psnr={},
+        cameras=shell.cameras[views],
+        box=shell.box,
+        origins=shell.origins,
+        ellipsoids=shell.ellipsoids,
+    )
+    method.values["coverage"] = "file"
+    method.show(bake, session.gpu_scene, Path("grid.pem"))
+    session.render_offscreen(method, (R, R))
+    file_image = session.read_hdr().astype(np.float64)
+    covered = np.abs(orbit_image).sum(axis=-1) > 0
+    assert covered.sum() > 100
+    assert np.abs(file_image - orbit_image).max() <= 1e-6 * np.abs(orbit_image).max()
+    session.release()
+
+
+def test_a_background_bake_stopped_midway_keeps_whole_views_and_resumes(cache):
+    store = OrbitStore("room", None, STEP, parameters=TINY)
+    job = OrbitBakeJob(store, "room")
+    camera = load_scene("room").camera
+    job.request(camera, [0])
+    deadline = time.monotonic() + 60.0
+    while len(job.done()) < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    job.stop()
+    done = store.done()
+    assert len(done) >= 2 and not job.running
+    assert all(p.suffix == ".npz" for p in store.parts.iterdir())  # no half-written file
+    assert all(store.load(v) is not None for v in done)
+    nearest = sorted(done)[0]
+    first = store.parts / f"view-{nearest:05d}.npz"
+    stamp = first.stat().st_mtime_ns
+    again = OrbitBakeJob(store, "room")
+    again.request(camera, [])
+    assert again._order and not set(again._order) & done  # only the views still missing
+    again.stop()
+    assert first.stat().st_mtime_ns == stamp
