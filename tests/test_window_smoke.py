@@ -24,11 +24,11 @@ import pytest
 from imgui_bundle import imgui
 
 from envstudio.engine.grid_view import tile_layout
-from envstudio.engine.registry import available_methods
+from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
-from envstudio.measure.matching import match_glossiness
+from envstudio.measure.matching import GlossinessLink
 from envstudio.ui.app import CYCLE_FRAMES
 from envstudio.ui.docking import PANELS, ViewRect, gl_viewport
 
@@ -333,14 +333,14 @@ def test_the_reference_in_the_window_shows_no_black_reflector_after_ten_frames(x
 
 def matched_session(names: list[str]) -> RenderSession:
     """A headless session of the default scene whose methods ``names`` are set up as the grid
-    sets them: glossiness matched to the first (the method on show), cameras steered; each
-    rendered once (so bakes are made and cached, as for a user's second run)."""
+    sets them: glossiness matched to the first (the method on show) through the reference's
+    Phong exponent, cameras steered; each rendered once (so bakes are made and cached, as
+    for a user's second run)."""
     session = RenderSession(build_scene())
     methods = {name: session.method(name) for name in names}
-    main = methods[names[0]]
-    for method in methods.values():
-        if method is not main:
-            match_glossiness(method, main, session.gpu_scene.cube_size)
+    hub = session.method(ground_truth_class().name)
+    cube = session.gpu_scene.cube_size
+    GlossinessLink().follow(list(methods.values()), methods[names[0]], hub, cube)
     for method in methods.values():
         method.steer_camera(session.camera)
     for name in names:
