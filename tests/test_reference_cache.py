@@ -7,13 +7,19 @@ import os
 import numpy as np
 import pytest
 
+from envstudio.core.metrics import flip, psnr
+from envstudio.engine.grid_view import tile_layout
 from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
 from envstudio.measure import ground_truth_cache
+from envstudio.measure.cached_reference import CachedReferences
+from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.ground_truth_cache import cache_limit_bytes, load_state, prune, save_state
+from envstudio.measure.matching import GlossinessLink
 from envstudio.methods.reference import method as reference_method
 from envstudio.scene.environment import Environment
+from envstudio.ui.grid import GridMetrics, GridState, tile_label
 from test_render_gl import sphere_scene
 
 MB = 2**20
@@ -133,3 +139,71 @@ def test_a_saved_state_that_does_not_load_is_one_note_and_discarded(tmp_path, ca
     assert not path.exists()  # discarded: the next save writes a fresh one
     save_state(path, state)
     assert np.array_equal(load_state(path)["sum"], state["sum"])
+
+
+def _gradient() -> Environment:
+    """A 32 x 16 lat-long map, bright at the top and coloured by longitude."""
+    v, u = np.mgrid[0:16, 0:32].astype(np.float32)
+    image = np.dstack([1.0 + u / 8.0, 4.0 * (1.0 - v / 16.0) ** 2, 0.5 + v / 16.0])
+    return Environment(image.astype(np.float32))
+
+
+def test_the_grid_finds_compares_reference_and_measures_a_tile_as_compare_did(gl_ctx):
+    """Issue 29: a reference ``compare`` saved is found for the viewer's tiles at the same
+    camera (kautz at the b matched to N; hwconv at N and mirror share its model's reference)
+    and the tile's PSNR and FLIP against it equal core/metrics' on compare's own images."""
+    size, exponent = (32, 32), 100.0
+    session = RenderSession(sphere_scene(_gradient(), rings=16), ctx=gl_ctx)
+    plan = plan_parameters(
+        method_classes(["kautz"]), ["trace=false", "max_samples=8", f"phong_exponent={exponent:g}"]
+    )
+    comparison = run_comparison(session, ["kautz"], size, plan, frames=1, warmup=0, cache=True)
+    session.release()
+
+    viewer = RenderSession(sphere_scene(_gradient(), rings=16), ctx=gl_ctx)  # the window's session
+    hub = viewer.method("reference")
+    hub.values["trace"] = False  # the reference panel as the comparison had it
+    tiles = [viewer.method(name) for name in ("hwconv", "kautz", "mirror", "reference")]
+    tiles[0].values["phong_exponent"] = exponent
+    cube = viewer.gpu_scene.cube_size
+    GlossinessLink().follow(tiles, tiles[0], hub, cube)
+    cached = CachedReferences(gl_ctx, viewer.programs, type(hub))
+    found = cached.find(viewer, hub, tiles, hub, cube)
+    assert sorted(found) == ["hwconv", "kautz", "mirror"]  # one reference for the model
+    assert {f.path for f in found.values()} == {ground_truth_cache.cache_path(session, hub, size)}
+    assert found["kautz"].size == size
+
+    display = viewer.renderer.display.as_dict()
+    truth, mask = comparison.reference.display, comparison.mask
+    for result in comparison.results:
+        numbers = cached.measure(viewer, viewer.method(result.name), found[result.name], display)
+        assert numbers.psnr_db == pytest.approx(psnr(result.display, truth, mask), rel=1e-6)
+        assert numbers.flip == pytest.approx(flip(result.display, truth, mask), rel=1e-5)
+        assert numbers.psnr_db == pytest.approx(result.metrics.psnr_db, rel=1e-6)
+        assert "8 spp" in numbers.reference
+
+    # the grid: looked up once the view stays still, then one tile a step, labelled
+    clock = iter(range(100))
+    metrics = GridMetrics(viewer.renderer, "reference", clock=lambda: float(next(clock)))
+    state = GridState()
+    state.enter()
+    state.tiles = tile_layout(["hwconv", "kautz", "mirror"], (0, 0, 96, 32))
+    shown = {name: viewer.method(name) for name in ("hwconv", "kautz", "mirror")}
+    for _ in range(5):  # a change, the look-up, three tiles
+        metrics.update(state, shown, viewer, hub, None)
+    kautz = state.numbers["kautz"]
+    assert (kautz.psnr_db, kautz.against) == (numbers.psnr_db, "cached 32×32")
+    assert all(state.numbers[name].psnr_db is not None for name in shown)
+    assert tile_label(state.tiles[1], kautz).endswith("(cached 32×32)")
+    assert "compare saved at this camera (phong 32×32, N = 100: 8 spp" in state.metrics_note
+
+    viewer.camera.orbit(10.0, 0.0)  # another camera: the numbers go, no reference there
+    metrics.update(state, shown, viewer, hub, None)
+    assert all(state.numbers[name].psnr_db is None for name in shown)
+    assert cached.find(viewer, hub, tiles, hub, cube) == {}
+    for _ in range(2):
+        metrics.update(state, shown, viewer, hub, None)
+    assert "no reference saved by compare at this camera" in state.metrics_note
+    metrics.release()
+    cached.release()
+    viewer.release()

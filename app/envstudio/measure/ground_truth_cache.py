@@ -53,27 +53,69 @@ def cache_dir() -> Path:
     return Path(base) / "envstudio"
 
 
-def cache_path(session: Session, reference: GroundTruth, size: tuple[int, int]) -> Path:
-    """Where the accumulation of ``reference`` for this session's view and ``size`` is kept."""
+def _add(digest, *arrays) -> None:
+    for array in arrays:
+        data = np.ascontiguousarray(array)
+        digest.update(str((data.dtype, data.shape)).encode())
+        digest.update(data.tobytes())
+
+
+def scene_digest(session: Session):
+    """The key's first part: the environment's pixels and every node (a ``hashlib`` object).
+
+    Hashing a large environment takes tens of milliseconds; a caller that looks up
+    many keys of one scene (the viewer's grid) makes it once and passes it to
+    :func:`cache_path`.
+    """
     digest = hashlib.sha256()
-
-    def add(*arrays) -> None:
-        for array in arrays:
-            data = np.ascontiguousarray(array)
-            digest.update(str((data.dtype, data.shape)).encode())
-            digest.update(data.tobytes())
-
     scene = session.scene
-    add(scene.environment.radiance)
+    _add(digest, scene.environment.radiance)
     for node in scene.nodes:
         digest.update(node.role.encode())
-        add(node.mesh.positions, node.mesh.normals, node.mesh.indices)
-        add(node.transform.matrix(), np.asarray(node.color, np.float64))
+        _add(digest, node.mesh.positions, node.mesh.normals, node.mesh.indices)
+        _add(digest, node.transform.matrix(), np.asarray(node.color, np.float64))
+    return digest
+
+
+def cache_path(session: Session, reference: GroundTruth, size: tuple[int, int], scene=None) -> Path:
+    """Where the accumulation of ``reference`` for this session's view and ``size`` is kept.
+
+    ``scene``: :func:`scene_digest` of ``session``, when already made (it is copied).
+    """
+    digest = scene.copy() if scene is not None else scene_digest(session)
     camera = session.camera
-    add(camera.view_matrix(), camera.projection_matrix(size[0] / size[1]), np.asarray(size))
+    _add(digest, camera.view_matrix(), camera.projection_matrix(size[0] / size[1]))
+    _add(digest, np.asarray(size))
     for part in reference.cache_identity():
         digest.update(part)
     return cache_dir() / reference.name / f"{digest.hexdigest()[:32]}.npz"
+
+
+_HEADER_READERS = {
+    (1, 0): np.lib.format.read_array_header_1_0,
+    (2, 0): np.lib.format.read_array_header_2_0,
+}
+
+
+def saved_sizes(folder: Path) -> set[tuple[int, int]]:
+    """The image sizes (w, h) of the accumulations saved in ``folder``, from their headers.
+
+    The size is not in a file's name (the key is a digest), so a caller that must
+    guess the size of a key (the viewer's grid) reads the (h, w, c) arrays'
+    shapes, without their data. Unreadable files are skipped.
+    """
+    sizes = set()
+    for path in folder.glob("*.npz"):
+        with contextlib.suppress(OSError, ValueError, zipfile.BadZipFile):
+            with zipfile.ZipFile(path) as archive:
+                for name in archive.namelist():
+                    with archive.open(name) as member:
+                        version = np.lib.format.read_magic(member)
+                        read_header = _HEADER_READERS.get(version)
+                        shape = read_header(member)[0] if read_header else ()
+                    if len(shape) == 3:
+                        sizes.add((int(shape[1]), int(shape[0])))
+    return sizes
 
 
 def load_state(path: Path) -> dict[str, np.ndarray] | None:

@@ -586,10 +586,7 @@ class Viewer(WindowConfig):
         if stats:  # the Stats panel: the main method's passes (else the first tile's)
             shown = stats.get(self.method_name) or next(iter(stats.values()))
             self.history.add(frametime * 1e3, shown)
-        if self.grid_metrics.due(grid.tiles):
-            self.grid_metrics.measure(
-                grid, methods, self.session.gpu_scene, self.session.camera, self.ctx.screen
-            )
+        self.grid_metrics.update(grid, methods, self.session, self._hub(), self.ctx.screen)
         scale, buffer_height = self._pixel_scale(), self.wnd.buffer_size[1]
         self.grid_labels = draw_labels(grid, scale, buffer_height)
 

@@ -18,13 +18,20 @@ Tile fraction (:class:`TileScale`)
     the fraction are not counted (programs compile, targets are made).
 
 Reference numbers (:class:`GridMetrics`)
-    When the ground truth (the reference) is one of the tiles, it converges
-    at the tile's size under the shared camera, and every :data:`METRICS_INTERVAL_S`
+    A reference ``compare`` (or the atlas) saved at this camera, scene and
+    display is looked up once the view has stayed unchanged for
+    :data:`STILL_S` (measure/cached_reference.py: one per tile, of its
+    reflectance model at its matched glossiness). A tile that has one is
+    rendered at that reference's size under the same camera and measured
+    against it as ``compare --ssaa 1`` measures (its label ends "(cached
+    128×128)"); the reference's own tile is not needed. Otherwise, when the
+    ground truth (the reference) is one of the tiles, it converges at the
+    tile's size under the shared camera, and every :data:`METRICS_INTERVAL_S`
     seconds each tile of the same reflectance model is measured against it:
     PSNR and LDR-FLIP (core/metrics.py) over the reflector's pixels, on the
-    8-bit tile pixels as shown. The numbers follow the reference's progress;
+    8-bit tile pixels as shown. Those numbers follow the reference's progress;
     they are as good as its estimate at that moment (its status line says how
-    far it is). A reference cached on disk by ``compare`` is not looked up.
+    far it is).
 """
 
 from __future__ import annotations
@@ -32,7 +39,9 @@ from __future__ import annotations
 import math
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import moderngl
 import numpy as np
@@ -41,10 +50,13 @@ from imgui_bundle import imgui
 
 from envstudio.core.metrics import MIN_SIZE, flip, psnr
 from envstudio.engine.frame import FrameRenderer
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.grid_view import Tile, tile_at
 from envstudio.engine.method import Method
-from envstudio.scene.camera import OrbitCamera
+from envstudio.engine.protocols import Session
+from envstudio.engine.registry import method_class
+from envstudio.errors import UserError
+from envstudio.gpu.programs import ShaderCompileError
+from envstudio.measure.cached_reference import CachedReference, CachedReferences, describe
 
 FRACTIONS = (1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 6, 1 / 8)
 FRACTION_NAMES = ("1", "1/2", "1/3", "1/4", "1/6", "1/8")
@@ -57,6 +69,8 @@ WARM_UP_FRAMES = 5
 EMA = 0.2
 """Weight of the newest frame in each tile's shown ms per frame."""
 METRICS_INTERVAL_S = 0.5
+STILL_S = 0.3
+"""Seconds the view must stay unchanged before the saved references are looked up."""
 CLICK_POINTS = 4.0
 """A press and release closer than this (window points) is a click, not an orbit."""
 LABEL_PAD = 3.0
@@ -129,6 +143,8 @@ class TileNumbers:
     psnr_db: float | None = None
     flip: float | None = None
     error: str | None = None
+    against: str | None = None
+    """What PSNR and FLIP are against when not the reference's tile ("cached 128×128")."""
 
 
 @dataclass
@@ -238,11 +254,23 @@ class GridState:
 
 
 class GridMetrics:
-    """PSNR and FLIP of the tiles against the reference's tile, one tile at a time.
+    """PSNR and FLIP of the tiles against a reference: one ``compare`` saved, else the
+    reference's tile; one piece of work at a time.
 
-    FLIP takes a few hundred milliseconds a tile on a CPU, so each step (at most
-    one every :data:`METRICS_INTERVAL_S`) measures the next tile in turn, and
-    reports the time it took so the tile fraction does not count it.
+    Cached references (:class:`envstudio.measure.cached_reference.CachedReferences`)
+        While the camera, the scene, the display or a tile's parameters change, nothing
+        is looked up. Once they have stayed the same for :data:`STILL_S`, the saved
+        references of this view are looked up once (a hash of the scene, one key per
+        tile and candidate), and then, one tile a step, each tile that has one is
+        rendered at that reference's size and measured against it. Its label says
+        so ("cached 128×128"). A change clears those numbers.
+    The reference's tile
+        Tiles with no cached reference, of the live reference's model and size, are
+        measured against the reference's tile as shown, one a step.
+
+    FLIP takes a few hundred milliseconds a tile on a CPU, so a step runs at most
+    every :data:`METRICS_INTERVAL_S`, and its time is reported (:attr:`spent_ms`) so
+    the tile fraction does not count it.
 
     Parameters
     ----------
@@ -250,38 +278,122 @@ class GridMetrics:
         The window's renderer: its context and programs draw the reflector mask.
     truth
         The ground truth's method name (the reference); None: no numbers.
+    clock
+        Seconds, monotonic (:func:`time.monotonic`).
     """
 
-    def __init__(self, renderer: FrameRenderer, truth: str | None):
+    def __init__(
+        self,
+        renderer: FrameRenderer,
+        truth: str | None,
+        clock: Callable[[], float] = time.monotonic,
+    ):
         self.truth = truth
+        self._clock = clock
         self._mask_renderer = FrameRenderer(renderer.ctx, renderer.programs)
+        self._cached = None
+        if truth is not None:
+            self._cached = CachedReferences(renderer.ctx, renderer.programs, method_class(truth))
         self._last = -math.inf
         self._next = 0
+        self._view: tuple | None = None
+        self._still_since = 0.0
+        self._looked_up = False
+        self._queue: list[tuple[str, CachedReference]] = []
+        self._found: dict[str, CachedReference] = {}
+        self._described: dict[Path, str] = {}
+        self._notes = {"cached": None, "live": None}
         self.spent_ms = 0.0
         """Milliseconds the last step took (0 when none ran this frame)."""
 
-    def due(self, tiles: list[Tile]) -> bool:
-        """Whether to measure this frame: the reference is a tile and the interval passed."""
-        self.spent_ms = 0.0
-        return any(t.name == self.truth for t in tiles) and (
-            time.monotonic() - self._last >= METRICS_INTERVAL_S
-        )
-
-    def measure(
+    def update(
         self,
         state: GridState,
         methods: dict[str, Method],
-        scene: GpuScene,
-        camera: OrbitCamera,
+        session: Session,
+        hub: Method | None,
         target: moderngl.Framebuffer,
     ) -> None:
-        """Measure the next tile in turn of the reference's reflectance model against the
-        reference tile, from ``target`` as shown; call after the grid is drawn, before the UI.
+        """Call every frame after the grid is drawn, before the UI: notice changes, and when
+        a step is due, look up, measure a tile against a cached reference, or measure one
+        against the reference's tile (from ``target`` as shown).
+
+        Parameters
+        ----------
+        methods
+            The tiles' methods by name.
+        session
+            The viewer's session: scene, camera, display settings.
+        hub
+            The ground truth's instance (its panel's values start the cache keys; its N is
+            the one the grid's matching goes through); None: no cached references.
         """
-        start = time.perf_counter()
-        self._step(state, methods, scene, camera, target)
-        self._last = time.monotonic()
-        self.spent_ms = (time.perf_counter() - start) * 1e3
+        self.spent_ms = 0.0
+        if self.truth is None:
+            return
+        start, now = time.perf_counter(), self._clock()
+        view = _view_key(state, methods, session, hub)
+        if view != self._view:  # moving or edited: the cached numbers no longer hold
+            self._view, self._still_since, self._looked_up = view, now, False
+            self._queue, self._found, self._described = [], {}, {}
+            for numbers in state.numbers.values():
+                if numbers.against is not None:
+                    numbers.psnr_db = numbers.flip = numbers.against = None
+            self._notes["cached"] = None
+        elif now - self._last >= METRICS_INTERVAL_S:
+            if not self._looked_up and now - self._still_since >= STILL_S and hub is not None:
+                self._look_up(state, methods, session, hub)
+            elif self._queue:
+                self._measure_cached(state, methods, session)
+            elif any(t.name == self.truth for t in state.tiles):
+                self._step(state, methods, session.gpu_scene, session.camera, target)
+            else:
+                self._compose(state)
+                return
+            self._last = now
+            self.spent_ms = (time.perf_counter() - start) * 1e3
+        self._compose(state)
+
+    def _look_up(self, state, methods, session, hub) -> None:
+        self._looked_up = True
+        if self._cached is None:
+            return
+        shown = [methods[t.name] for t in state.tiles]
+        cube = session.gpu_scene.cube_size
+        self._cached.forget()
+        self._found = self._cached.find(session, hub, shown, hub, cube)
+        self._queue = list(self._found.items())
+        if not self._found:
+            self._notes["cached"] = (
+                "no reference saved by compare at this camera (R: the scene's camera)"
+            )
+
+    def _measure_cached(self, state, methods, session) -> None:
+        name, found = self._queue.pop(0)
+        display = session.renderer.display.as_dict()
+        try:
+            result = self._cached.measure(session, methods[name], found, display)
+        except (UserError, ShaderCompileError) as exc:  # its tile says why, if it fails too
+            self._notes["cached"] = f"{name} at {describe(found)}: {str(exc).splitlines()[0]}"
+            result = None
+        numbers = state.numbers.setdefault(name, TileNumbers())
+        if result is None:
+            numbers.psnr_db = numbers.flip = numbers.against = None
+            return
+        numbers.psnr_db, numbers.flip = result.psnr_db, result.flip
+        numbers.against = f"cached {found.size[0]}×{found.size[1]}"
+        model = found.values.get("model", "")
+        self._described[found.path] = f"{model} {describe(found)}: {result.reference}".strip()
+        names = ", ".join(n for n in methods if n in self._found)
+        self._notes["cached"] = (
+            f"{names}: PSNR, FLIP against the reference compare saved at this camera "
+            f"({'; '.join(self._described.values())}), each method rendered at its size, "
+            "one sample per pixel"
+        )
+
+    def _compose(self, state: GridState) -> None:
+        notes = [note for note in self._notes.values() if note]
+        state.metrics_note = "; ".join(notes) if notes else None
 
     def _step(self, state, methods, scene, camera, target) -> None:
         truth_tile = next(t for t in state.tiles if t.name == self.truth)
@@ -289,23 +401,26 @@ class GridMetrics:
         model = reference.values["model"] if "model" in reference.values else None
         w, h = truth_tile.viewport[2:]
         status = getattr(reference, "status", None)
+        cached = {name for name, n in state.numbers.items() if n.against is not None}
         if getattr(status, "batches", 1) < 1:  # its first pass only: nothing to measure against
-            for numbers in state.numbers.values():
-                numbers.psnr_db = numbers.flip = None
-            state.metrics_note = f"PSNR, FLIP after the {self.truth}'s first batch"
+            for name, numbers in state.numbers.items():
+                if name not in cached:
+                    numbers.psnr_db = numbers.flip = None
+            self._notes["live"] = f"PSNR, FLIP after the {self.truth}'s first batch"
             return
         if min(w, h) < MIN_SIZE:
-            state.metrics_note = "tiles too small to measure"
+            self._notes["live"] = "tiles too small to measure"
             return
         measured = [
             t
             for t in state.tiles
             if t.name != self.truth
+            and t.name not in cached
             and t.viewport[2:] == (w, h)
             and (model is None or methods[t.name].reflectance == model)
         ]
         for tile in state.tiles:
-            if tile not in measured:
+            if tile not in measured and tile.name not in cached:
                 numbers = state.numbers.setdefault(tile.name, TileNumbers())
                 numbers.psnr_db = numbers.flip = None
         if not measured:
@@ -314,20 +429,43 @@ class GridMetrics:
         self._next += 1
         mask = self._mask_renderer.reflector_coverage(scene, camera, (w, h))
         if not mask.any():
-            state.metrics_note = "no reflector in view"
+            self._notes["live"] = "no reflector in view"
             return
         shown, truth = _tile_pixels(target, tile), _tile_pixels(target, truth_tile)
         numbers = state.numbers.setdefault(tile.name, TileNumbers())
         numbers.psnr_db, numbers.flip = psnr(shown, truth, mask), flip(shown, truth, mask)
         progress = reference.status_line()
-        state.metrics_note = (
+        self._notes["live"] = (
             f"PSNR, FLIP against the {self.truth} tile ({model} model), one tile a "
             f"{METRICS_INTERVAL_S:g} s in turn" + (f"; {progress}" if progress else "")
         )
 
     def release(self) -> None:
-        """Free the mask's target; safe twice."""
+        """Free the mask's target and the cached references' objects; safe twice."""
         self._mask_renderer.release()
+        if self._cached is not None:
+            self._cached.release()
+
+
+def _view_key(
+    state: GridState, methods: dict[str, Method], session: Session, hub: Method | None
+) -> tuple:
+    """What a cached reference's numbers depend on, cheap to compare every frame: the camera,
+    the scene's revisions and transforms, the display, and every tile's (and the hub's)
+    parameter values."""
+    scene = session.gpu_scene
+    nodes = tuple(node.transform.matrix().tobytes() for node in session.scene.nodes)
+    values = [(t.name, repr(methods[t.name].values.as_dict())) for t in state.tiles]
+    return (
+        session.camera.view_matrix().tobytes(),
+        scene.environment_revision,
+        scene.geometry_revision,
+        nodes,
+        repr(session.renderer.display.as_dict()),
+        tuple(values),
+        repr(hub.values.as_dict()) if hub is not None else None,
+        state.scale.index,  # a new fraction clears the numbers (GridState.numbers)
+    )
 
 
 def _tile_pixels(target: moderngl.Framebuffer, tile: Tile) -> npt.NDArray[np.float32]:
@@ -347,6 +485,8 @@ def tile_label(tile: Tile, numbers: TileNumbers | None) -> str:
     if numbers.psnr_db is not None and numbers.flip is not None:
         psnr = "inf" if math.isinf(numbers.psnr_db) else f"{numbers.psnr_db:.1f}"
         line += f"\nPSNR {psnr} dB  FLIP {numbers.flip:.3f}"
+        if numbers.against:
+            line += f"  ({numbers.against})"
     return line
 
 
@@ -401,8 +541,9 @@ def grid_section(methods: list[str], state: GridState) -> None:
         state.enter() if on else state.leave()
     imgui.set_item_tooltip(
         "Every method (or the ones ticked below) in tiles under one camera; click a tile to "
-        "show that method alone. Labels: ms per frame; PSNR and FLIP against the reference "
-        "tile while it is one of them."
+        "show that method alone. Labels: ms per frame; PSNR and FLIP against a reference "
+        "compare saved at this camera (looked up once the view stops changing), else against "
+        "the reference tile while it is one of them."
     )
     if not state.on:
         return
