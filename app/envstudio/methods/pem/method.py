@@ -299,6 +299,11 @@ class PemMethod(Method):
         """The bake on show (None: none for this scene)."""
         return None if self._loaded is None else self._loaded.bake
 
+    @property
+    def orbit(self) -> OrbitStore | None:
+        """The full orbit on show (None: a bake file, or none)."""
+        return None if self._loaded is None else self._loaded.orbit
+
     # -- the camera on the path ------------------------------------------------------------
 
     def path_camera(self, position: float, elevation: float = 0.5) -> OrbitCamera:

@@ -1,0 +1,204 @@
+"""The full-orbit PEM's numbers (issue 31 part 1): its spacing, and its quality anywhere.
+
+Not tests (measurements on a shared machine; docs/pem/orbit.md has the results)::
+
+    python -m envstudio.methods.pem.orbit_numbers --spacing 40,20,10,5 [--cameras 4]
+    python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24]
+
+- :func:`spacing_sweep`: at random cameras (elevations clipped to ±60°, so that the
+  coarsest grids stay inside ±89°), for each spacing s a 2 × 2 grid bake
+  whose cell has the camera at its centre (midway between samples on both axes),
+  played back there and held against the bake's ray trace at that camera
+  (methods/pem/offmanifold.py ``measure``). The issue's rule: the coarsest s whose
+  playback is within 1 dB of the 2× denser grid's (s / 2, the same camera at its
+  cell's centre).
+- :func:`orbit_quality`: at random cameras over the whole orbit, the layered
+  PEM, the sphere at infinity and the static EM of the shipped full orbit
+  (methods/pem/bake/orbit.py), each against the ray trace at that camera: PSNR and
+  FLIP per camera, and their minimum, median and maximum.
+
+Random cameras are uniform over the sphere of directions about the target (the
+orbit's ±89° rows included), at the scene camera's distance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from envstudio.engine.session import RenderSession
+from envstudio.io.scene_file import load_scene
+from envstudio.methods.pem import offmanifold
+from envstudio.methods.pem.bake.bake import run_bake
+from envstudio.methods.pem.bake.orbit import ORBIT_BAKE
+from envstudio.methods.pem.bake.views import ELEVATION_LIMIT, grid_views
+from envstudio.methods.pem.blending import view_blend
+from envstudio.methods.pem.lookups_gl import GlLookups
+from envstudio.scene.camera import OrbitCamera
+
+__all__ = ["main", "orbit_quality", "random_cameras", "spacing_sweep"]
+
+
+def random_cameras(count: int, seed: int = 31) -> list[tuple[float, float]]:
+    """``count`` (azimuth, elevation) pairs in degrees, uniform over the sphere, |el| ≤ 89°."""
+    rng = np.random.default_rng(seed)
+    azimuth = rng.uniform(0.0, 360.0, count)
+    elevation = np.degrees(np.arcsin(rng.uniform(-1.0, 1.0, count)))
+    elevation = np.clip(elevation, -ELEVATION_LIMIT, ELEVATION_LIMIT)
+    return [(float(a), float(e)) for a, e in zip(azimuth, elevation, strict=True)]
+
+
+def _measure(session, method, cameras, size: int) -> list[dict]:
+    views = [offmanifold.OffManifoldView(f"{a:.1f}/{e:.1f}", a, e) for a, e in cameras]
+    results = offmanifold.measure(session, method, views, size=size)
+    return [
+        {
+            "azimuth": round(r.view.azimuth, 2),
+            "elevation": round(r.view.elevation, 2),
+            "pixels": r.pixels,
+            **{
+                f"{model}_{k}": round(m[k], 4)
+                for model, m in r.metrics.items()
+                for k in ("psnr", "flip")
+            },
+            "best": r.best,
+        }
+        for r in results
+    ]
+
+
+def spacing_sweep(
+    scene: str = "room",
+    steps: tuple[float, ...] = (40.0, 20.0, 10.0, 5.0),
+    cameras: int = 4,
+    size: int = 160,
+    workers: int | None = None,
+) -> dict:
+    """Playback PSNR midway between samples against the grid spacing (module docstring).
+
+    Returns
+    -------
+    dict
+        ``rows``: per camera and spacing the models' PSNR and FLIP; ``mean``: per
+        spacing the mean layered PSNR; ``chosen``: the coarsest spacing within 1 dB
+        of the next denser one at every camera (None if none is).
+    """
+    scene_obj = load_scene(scene)
+    base = scene_obj.camera
+    picks = [(a, float(np.clip(e, -60.0, 60.0))) for a, e in random_cameras(cameras, seed=7)]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        session = RenderSession(scene_obj, cube_size=128)
+        try:
+            method = session.method("pem")
+            for c, (azimuth, elevation) in enumerate(picks):
+                for step in steps:
+                    start = time.perf_counter()
+                    out = Path(tmp) / f"c{c}-s{step:g}.pem"
+                    corner = (azimuth - step / 2, elevation - step / 2)
+                    space = grid_views(base, 2, step, 2, step, start=corner)
+                    run_bake(
+                        scene, space, out, lookups="gl", gl_lookups=GlLookups, probe=False,
+                        workers=workers, **ORBIT_BAKE,
+                    )  # fmt: skip
+                    method.values.update({"pem": str(out), "coverage": "file"})
+                    method.prepare(session.gpu_scene)
+                    (row,) = _measure(session, method, [(azimuth, elevation)], size)
+                    rows.append(
+                        {"camera": c, "step": step, **row, "seconds": time.perf_counter() - start}
+                    )
+        finally:
+            session.release()
+    mean = {s: float(np.mean([r["layered_psnr"] for r in rows if r["step"] == s])) for s in steps}
+    chosen = None
+    for coarse, fine in itertools.pairwise(steps):
+        gaps = [
+            fr["layered_psnr"] - cr["layered_psnr"]
+            for cr in rows
+            for fr in rows
+            if cr["step"] == coarse and fr["step"] == fine and cr["camera"] == fr["camera"]
+        ]
+        if max(gaps) <= 1.0:
+            chosen = coarse
+            break
+    return {"rows": rows, "mean_layered_psnr": mean, "chosen": chosen}
+
+
+def orbit_quality(
+    scene: str = "room", cameras: int = 24, size: int = 160, workers: int | None = None
+) -> dict:
+    """Layered, sphere and static EM of the full orbit at random cameras (module docstring).
+
+    Returns
+    -------
+    dict
+        ``rows`` per camera, ``summary`` per model the min / median / max of PSNR and
+        FLIP, ``layered_leads`` whether the layered PEM has the best PSNR at every
+        camera, ``bake_seconds`` of the views baked for them.
+    """
+    picks = random_cameras(cameras)
+    session = RenderSession(load_scene(scene), cube_size=128)
+    try:
+        method = session.method("pem")
+        method.values["coverage"] = "orbit"
+        method.prepare(session.gpu_scene)
+        store = method.orbit
+        space, target = store.space, np.asarray(store.space["target"])
+        needed = []
+        for azimuth, elevation in picks:
+            eye = OrbitCamera(azimuth=azimuth, elevation=elevation, target=target).position
+            blend = view_blend(space, eye)
+            needed += [v for v, w in zip(blend.views, blend.weights, strict=True) if w > 0]
+        start = time.perf_counter()
+        report = store.bake(list(dict.fromkeys(needed)), workers=workers)
+        bake_seconds = time.perf_counter() - start
+        rows = _measure(session, method, picks, size)
+    finally:
+        session.release()
+    models = ("layered", "sphere", "static")
+    summary = {
+        f"{model}_{k}": [
+            round(float(f(np.array([r[f"{model}_{k}"] for r in rows]))), 4)
+            for f in (np.min, np.median, np.max)
+        ]
+        for model in models
+        for k in ("psnr", "flip")
+    }
+    return {
+        "rows": rows,
+        "summary (min, median, max)": summary,
+        "layered_leads": all(r["best"] == "layered" for r in rows),
+        "views_baked": len(report.baked),
+        "bake_seconds": round(bake_seconds, 1),
+        "trace_seconds_mean": round(float(np.mean(report.trace_seconds or [0.0])), 3),
+        "infer_seconds_mean": round(float(np.mean(report.infer_seconds or [0.0])), 3),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print :func:`spacing_sweep` or :func:`orbit_quality` as JSON."""
+    parser = argparse.ArgumentParser(prog="python -m envstudio.methods.pem.orbit_numbers")
+    parser.add_argument("--scene", default="room")
+    parser.add_argument("--spacing", metavar="S,S,...", help="spacings to sweep, degrees")
+    parser.add_argument("--orbit", action="store_true", help="the full orbit at random cameras")
+    parser.add_argument("--cameras", type=int)
+    parser.add_argument("--size", type=int, default=160)
+    parser.add_argument("--workers", type=int)
+    args = parser.parse_args(argv)
+    if args.spacing:
+        steps = tuple(float(s) for s in args.spacing.split(","))
+        out = spacing_sweep(args.scene, steps, args.cameras or 4, args.size, args.workers)
+    else:
+        out = orbit_quality(args.scene, args.cameras or 24, args.size, args.workers)
+    print(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
