@@ -170,8 +170,12 @@ def test_cli_bakes_on_a_pool(tmp_path, capsys, runner):
     argv = ["bake", "pem", "--scene", "room", "--views", "2", "--step", "5", "--size", "32"]
     argv += ["--samples", "2", "--em-size", "4", *runner, "-o", str(out)]
     assert main(argv) == 0
-    assert "2 views × 2 parts" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "2 views × 2 parts" in printed.out
     assert load_pem(out).views == 2
+    # an arc leaves most of the orbit outside: said in one line (issue 31)
+    warning = "warning: the views cover azimuth 25°…30° and elevation 18°…18°: 720 of 720 orbit"
+    assert warning in printed.err and printed.err.strip().count("\n") == 0
 
 
 def test_local_dask_cluster_bakes_the_same_file(baked, tmp_path):

@@ -21,11 +21,18 @@ from tqdm import tqdm
 
 from envstudio.errors import OutputFileError, ParameterError
 from envstudio.io.atomic import check_output_path
-from envstudio.io.scene_file import resolve_scene
+from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.methods.pem.bake import bake
 from envstudio.methods.pem.bake.bake import BakeReport, parts_folder
 from envstudio.methods.pem.bake.lookups import PLAYBACK
-from envstudio.methods.pem.bake.views import arc_views, grid_views
+from envstudio.methods.pem.bake.orbit import ORBIT_STEP
+from envstudio.methods.pem.bake.views import (
+    ViewSpace,
+    arc_views,
+    grid_views,
+    orbit_views,
+    uncovered,
+)
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.plugin import Bake
 from envstudio.scene.camera import OrbitCamera
@@ -137,6 +144,19 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--workers {args.workers}: expected 0 (in-process) or more")
 
 
+def _coverage_warning(space: ViewSpace, camera: OrbitCamera) -> str:
+    """One line: which of the scene's orbit cameras the bake's views leave outside (issue 31)."""
+    cameras = orbit_views(camera, *ORBIT_STEP).cameras()
+    outside = uncovered(space, cameras)
+    az, el = space.azimuths, space.elevations
+    return (
+        f"envstudio: warning: the views cover azimuth {az.min():g}°…{az.max():g}° and elevation "
+        f"{el.min():g}°…{el.max():g}°: {len(outside)} of {len(cameras)} orbit cameras "
+        f"({ORBIT_STEP[0]:g}° × {ORBIT_STEP[1]:g}° apart) lie outside and play the nearest edge "
+        "views; pem's coverage=orbit plays every one (docs/pem/orbit.md)"
+    )
+
+
 def _saved(out, args: argparse.Namespace) -> str:
     """How many views are saved in the parts folder, and that the same command resumes."""
     folder = parts_folder(out)
@@ -203,6 +223,8 @@ def run_bake_pem(args: argparse.Namespace) -> int:
         f"{bake.levels} levels ({len(report.baked)} baked{resumed}) in {report.seconds:.1f} s; "
         f"playback PSNR {scores} dB"
     )
+    camera = load_scene(args.scene).camera
+    print(_coverage_warning(views(camera), camera), file=sys.stderr)
     return 0
 
 

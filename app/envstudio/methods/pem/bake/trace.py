@@ -445,7 +445,7 @@ class SceneTracer:
 
         def acc(weights):
             w = np.asarray(weights, dtype=np.float64)
-            cols = w.reshape(len(ri), -1)
+            cols = w.reshape(len(ri), w.shape[1] if w.ndim == 2 else 1)  # no pixel: none
             sums = [
                 np.bincount(bins, cols[:, c], minlength=n_parts * npix)
                 for c in range(cols.shape[1])
