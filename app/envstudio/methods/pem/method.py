@@ -387,12 +387,13 @@ class PemMethod(Method):
         self.last_blend = blend
         views = list(blend.views)
         if loaded.orbit is not None:
-            slots = self._orbit_slots(frame, blend)
-            if slots is None:  # the window: the views about the camera are still baking
+            placed = self._orbit_slots(frame, blend)
+            if placed is None:  # the window: the views about the camera are still baking
                 set_uniform(program, "u_em_model", MODELS.index("static"))
                 set_uniform(program, "u_use_hull", False)
                 return MODELS.index("static")
-            views = slots
+            blend, views = placed
+            self.last_blend = blend
         views = views + [0] * (16 - len(views))
         weights = list(blend.weights) + [0.0] * (16 - len(blend.weights))
         set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[16]
@@ -414,34 +415,45 @@ class PemMethod(Method):
         set_uniform(program, "u_em_model", model)
         return model
 
-    def _orbit_slots(self, frame: FrameInputs, blend: ViewBlend) -> list[int] | None:
-        """The resident slots of a full orbit's blended views, baking them where needed.
+    def _orbit_slots(
+        self, frame: FrameInputs, blend: ViewBlend
+    ) -> tuple[ViewBlend, list[int]] | None:
+        """A full orbit's blend over the views that see the reflector, and their slots.
 
-        Headless the missing views are baked now; in the window the background bake
-        is asked for them (and the rest of the orbit after), and None is returned
-        until they are there.
+        The views blended with a weight are baked where needed: headless now; in the
+        window the background bake is asked for them (and the rest of the orbit
+        after), and None is returned until they are there. A view that saw no
+        reflector (a camera under the floor) leaves the blend, the others' weights
+        scaled up to sum to 1 (its maps are empty, not the scene).
         """
         loaded = self._loaded
+        orbit = loaded.orbit
         weighted = [v for v, w in zip(blend.views, blend.weights, strict=True) if w > 0.0]
         weighted = list(dict.fromkeys(weighted or blend.views[:1]))
-        slots = loaded.textures.slots(weighted, loaded.orbit.load)
+        slots = loaded.textures.slots(weighted, orbit.load)
         if self.frame_budget_ms is None:
             if slots is None:
                 self._bake_now(weighted)
-                slots = loaded.textures.slots(weighted, loaded.orbit.load)
+                slots = loaded.textures.slots(weighted, orbit.load)
             if slots is None:
-                raise InputFileError(f"{loaded.orbit.parts}: views {weighted} did not bake")
+                raise InputFileError(f"{orbit.parts}: views {weighted} did not bake")
         else:
             if loaded.job is None:
-                loaded.job = OrbitBakeJob(loaded.orbit, frame.scene.scene.source)
-            azimuth, elevation = camera_angles(
-                frame.camera_position, loaded.bake.view_space["target"]
-            )
+                loaded.job = OrbitBakeJob(orbit, frame.scene.scene.source)
+            target = loaded.bake.view_space["target"]
+            azimuth, elevation = camera_angles(frame.camera_position, target)
             loaded.job.request(OrbitCamera(azimuth=azimuth, elevation=elevation), weighted)
             if slots is None:
                 return None
         where = dict(zip(weighted, slots, strict=True))
-        return [where.get(v, slots[0]) for v in blend.views]
+        pairs = [(v, w) for v, w in zip(blend.views, blend.weights, strict=True) if w > 0.0]
+        seen = [(v, w) for v, w in pairs if orbit.sees_reflector(v)]
+        if seen and len(seen) < len(pairs):
+            total = sum(w for _, w in seen)
+            blend = ViewBlend(
+                tuple(v for v, _ in seen), tuple(w / total for _, w in seen), blend.position
+            )
+        return blend, [where.get(v, slots[0]) for v in blend.views]
 
     def _bake_now(self, views: list[int]) -> None:
         """Bake a full orbit's ``views`` before the frame (headless), a bar on a terminal."""

@@ -136,6 +136,7 @@ class OrbitStore:
         self.output = self.folder / "orbit.pem"
         self.parts = parts_folder(self.output)
         self._shell: PemBake | None = None
+        self._seen: dict[int, bool] = {}  # view → whether it saw a reflector (once baked)
 
     # -- what is baked -----------------------------------------------------------------------
 
@@ -145,6 +146,22 @@ class OrbitStore:
             return set()
         names = (p.name for p in self.parts.glob("view-*.npz"))
         return {int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()}
+
+    def sees_reflector(self, view: int) -> bool:
+        """Whether the baked ``view`` saw a reflector part (a finite fit PSNR).
+
+        Raises
+        ------
+        KeyError
+            ``view`` is not baked (or its part is damaged).
+        """
+        if view not in self._seen:
+            task = self.plan.tasks[view]
+            part = load_part(self.parts / part_name(task), self.plan.key, task)
+            if part is None:
+                raise KeyError(f"view {view} of {self.parts} is not baked")
+            self._seen[view] = bool(np.isfinite(part["psnr_distant"]).any())
+        return self._seen[view]
 
     def load(self, view: int) -> dict[str, list[np.ndarray]] | None:
         """The maps of ``view``, or None where its part is missing, foreign or damaged.
@@ -158,6 +175,7 @@ class OrbitStore:
         part = load_part(self.parts / part_name(task), self.plan.key, task)
         if part is None:
             return None
+        self._seen[view] = bool(np.isfinite(part["psnr_distant"]).any())
         levels = len(self.shell().maps["distant"])
         return {m: [part[f"{m}_{k}"] for k in range(levels)] for m in self.plan.models}
 
