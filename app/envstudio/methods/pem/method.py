@@ -35,7 +35,7 @@ from envstudio.core.cubemap import faces_to_cross
 from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.pem.bake.orbit import OrbitStore
+from envstudio.methods.pem.bake.orbit import ORBIT_STEP, OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
@@ -107,6 +107,15 @@ class PemMethod(Method):
             choices=("auto", "orbit", "file"),
         ),
         Parameter(
+            "orbit_step",
+            "choice",
+            f"{ORBIT_STEP[0]:g}",
+            help="Degrees between the full orbit's views in azimuth and elevation (each "
+            "spacing its own cache; docs/pem/orbit.md: the finer, the closer midway, and the "
+            "more views to bake).",
+            choices=("20", "10", "5"),
+        ),
+        Parameter(
             "em_model",
             "choice",
             "layered",
@@ -148,9 +157,10 @@ class PemMethod(Method):
     )
 
     @staticmethod
-    def orbit_store(source: str) -> OrbitStore:
-        """The full orbit of a scene file (its views baked with the GL lookups)."""
-        return OrbitStore(source, GlLookups)
+    def orbit_store(source: str, step: float) -> OrbitStore:
+        """The full orbit of a scene file, ``step`` degrees apart on both axes (its views
+        baked with the GL lookups)."""
+        return OrbitStore(source, GlLookups, (step, step))
 
     def __init__(self, ctx: moderngl.Context, programs):
         super().__init__(ctx, programs)
@@ -237,14 +247,14 @@ class PemMethod(Method):
             meshes were replaced since (the orbit bakes the scene file's).
         """
         meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        key = ("orbit", scene.scene.source, id(scene), meshes)
+        key = ("orbit", scene.scene.source, id(scene), meshes, str(self.values["orbit_step"]))
         if self._loaded is not None and self._loaded.key == key:
             return
         name = scene.scene.name
         if not scene.scene.source:
             raise InputFileError(f"scene {name}: not read from a scene file, so no orbit to bake")
         try:
-            store = self.orbit_store(scene.scene.source)
+            store = self.orbit_store(scene.scene.source, float(self.values["orbit_step"]))
         except ValueError as exc:
             raise InputFileError(f"{scene.scene.source}: {exc}") from None
         if store.plan.scene.environment.checksum() != scene.scene.environment.checksum():
