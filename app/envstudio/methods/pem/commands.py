@@ -87,6 +87,15 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         help="coupled passes after the independent one (2)",
     )
     parser.add_argument(
+        "--phong-exponent",
+        type=float,
+        default=None,
+        metavar="N",
+        help="glossy reflectors (not in seed 003, whose §7 leaves them open): trace with the "
+        "Phong lobe of exponent N sampled at each hit, as the reference's lobe (default: "
+        "mirrors; docs/pem)",
+    )
+    parser.add_argument(
         "--no-ptm",
         dest="ptm",
         action="store_false",
@@ -128,6 +137,9 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--coupling {coupling:g}: expected a weight in [0, 100]")
     if getattr(args, "coupling_passes", 2) < 1:
         raise ParameterError(f"--coupling-passes {args.coupling_passes}: expected at least 1")
+    exponent = getattr(args, "phong_exponent", None)
+    if exponent is not None and not (math.isfinite(exponent) and 0.0 < exponent <= 1e7):
+        raise ParameterError(f"--phong-exponent {exponent:g}: expected an exponent in (0, 1e7]")
     if getattr(args, "elevations", 1) < 1:
         raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
@@ -203,6 +215,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 ptm=getattr(args, "ptm", True),
                 coupling=getattr(args, "coupling", 0.0),
                 coupling_passes=getattr(args, "coupling_passes", 2),
+                phong_exponent=getattr(args, "phong_exponent", None),
             )
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
             raise ParameterError(str(exc)) from None

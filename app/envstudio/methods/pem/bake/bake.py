@@ -27,6 +27,13 @@ or the four of a grid. Each half pass is again one work unit per view, run in
 parallel, saved as ``view-NNNNN-pass-K.npz`` and resumable. γ = 0 runs the independent
 pass alone, with the parameters of a bake made before the option existed: the
 same file, bit for bit.
+
+Glossy reflectors (issue 31 part 5; seed 003 §7 leaves them "to be
+investigated"): with ``phong_exponent`` N > 0 every view is traced with the
+reflectors' Phong lobe of exponent N sampled at each hit
+(:mod:`~envstudio.methods.pem.bake.trace`), and its maps are inferred as for a
+mirror, for the playback's trilinear lookups along r. Unset (None or 0): the
+mirror, with the parameters, parts and file of a bake made before the option.
 """
 
 from __future__ import annotations
@@ -162,6 +169,9 @@ class ViewTask:
         For a coupled pass: model → per part None or (mean, count), the mean
         (Σ 6 n_k², C) of the ``count`` neighbours' maps of the pass before (derived
         from verified parts, so not part of the part's identity).
+    phong_exponent : float
+        N of the reflectors' Phong lobe sampled by the trace (module docstring);
+        0: mirrors, as bakes before the option.
     """
 
     scene: str
@@ -184,6 +194,7 @@ class ViewTask:
     coupling: float = 0.0
     coupling_pass: int = 0
     anchors: dict | None = None
+    phong_exponent: float = 0.0
 
     def camera(self) -> OrbitCamera:
         """The view's camera."""
@@ -287,7 +298,9 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
     ctx = _context(task.scene)
     tracer, n = ctx["tracer"], task.em_size
     camera = task.camera()
-    view = tracer.trace(camera, task.size, task.samples, task.seed + task.index)
+    view = tracer.trace(
+        camera, task.size, task.samples, task.seed + task.index, task.phong_exponent or None
+    )
     start = time.perf_counter()
     lookups = _view_lookups(ctx, task, camera)
     coupled = {}
@@ -378,6 +391,8 @@ def _part_header(key: str, task: ViewTask) -> dict:
         del task_fields["coupling"], task_fields["coupling_pass"]
     if tuple(task.models) == REQUIRED:
         del task_fields["models"]
+    if not task.phong_exponent:  # a mirror: the identity of parts before issue 31 part 5
+        del task_fields["phong_exponent"]
     return {"key": key, "task": task_fields}
 
 
@@ -486,7 +501,7 @@ class BakePlan:
 def plan_bake(
     scene, views, size=256, samples=4, em_size=64, smoothness=1e-3, seed=0, tie=None,
     lod_bias=LOD_BIAS, lookups="auto", gl_lookups=None, ptm=True, coupling=0.0, coupling_passes=2,
-    probe=True,
+    probe=True, phong_exponent=None,
 ) -> BakePlan:  # fmt: skip
     """The tasks, parameters and key of a bake (:func:`run_bake`'s arguments; no work done).
 
@@ -494,11 +509,15 @@ def plan_bake(
     GL context to see whether one can be made: a process that holds a context (the
     viewer) must not make and release another.
 
+    ``phong_exponent`` N > 0 samples the reflectors' Phong lobe in the trace
+    (module docstring); None or 0: mirrors, and the parameters and key of before.
+
     Raises
     ------
     ValueError
         A scene without a reflector, ``gl`` lookups without a context, a negative
-        coupling weight or no coupled pass for a positive one.
+        coupling weight or no coupled pass for a positive one, a Phong exponent
+        that is negative or not finite.
     """
     scene_path = resolve_scene(scene)
     scene_obj = load_scene(scene_path)
@@ -511,6 +530,9 @@ def plan_bake(
         raise ValueError(f"coupling {coupling:g}: expected a weight ≥ 0")
     if coupling and int(coupling_passes) < 1:
         raise ValueError(f"coupling passes {coupling_passes}: expected at least 1")
+    exponent = float(phong_exponent or 0.0)
+    if not (np.isfinite(exponent) and exponent >= 0.0):
+        raise ValueError(f"phong exponent {exponent:g}: expected N > 0, or 0 for a mirror")
     models = MODELS if ptm else REQUIRED
     parameters = {
         "size": int(size),
@@ -531,6 +553,8 @@ def plan_bake(
     if coupling:  # not in seed 003 (issue 31); absent: the independent bake of before
         parameters["coupling"] = coupling
         parameters["coupling_passes"] = int(coupling_passes)
+    if exponent:  # issue 31 part 5 (seed 003 §7); absent: the mirror bake of before
+        parameters["phong_exponent"] = exponent
     key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
     tasks = [
         ViewTask(
@@ -552,6 +576,7 @@ def plan_bake(
             gl_lookups if lookups == "gl" else None,
             models,
             coupling,
+            phong_exponent=exponent,
         )
         for i, c in enumerate(space.cameras())
     ]
@@ -583,6 +608,7 @@ def run_bake(
     only: list[int] | None = None,
     assemble: bool = True,
     probe: bool = True,
+    phong_exponent: float | None = None,
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -644,6 +670,11 @@ def run_bake(
         full-orbit PEM's views, :mod:`.orbit`); ``report.bake`` is then None.
     probe
         As :func:`plan_bake`.
+    phong_exponent
+        N > 0: trace glossy reflectors, their Phong lobe of exponent N sampled at
+        each hit, stored as ``parameters["phong_exponent"]`` (issue 31 part 5; not in
+        seed 003, whose §7 leaves glossy surfaces open). None or 0: mirrors, the
+        parameters, parts and file of a bake made before the option.
 
     Returns
     -------
@@ -653,7 +684,7 @@ def run_bake(
     output = check_output_path(output)
     plan = plan_bake(
         scene, views, size, samples, em_size, smoothness, seed, tie, lod_bias, lookups,
-        gl_lookups, ptm, coupling, coupling_passes, probe,
+        gl_lookups, ptm, coupling, coupling_passes, probe, phong_exponent,
     )  # fmt: skip
     scene_obj, space, parameters, key, tasks = (
         plan.scene,

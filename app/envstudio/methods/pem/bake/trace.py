@@ -49,8 +49,33 @@ recombination is exact; with several it is exact up to the variation of F, d,
 D within a pixel (layers are per-pixel means: D and F over the part's samples,
 L over its local samples).
 
-Reflectors are traced as perfect mirrors (the paper's teapot); their glossy
-lobe (``phong_exponent``) is not sampled.
+Glossy reflectors (issue 31 part 5; seed 003 §7: "handling glossy surfaces as
+well as mirror-like ones should be possible with our techniques but remains to
+be investigated")
+------------------------------------------------------------------------------
+By default (``phong_exponent`` None or 0) reflectors are traced as perfect
+mirrors, the paper's teapot. With a Phong exponent N > 0 every reflector sample
+(each of a pixel's rays on its own) draws one direction l from the normalised
+Phong lobe about its mirror direction r, the lobe of the reference
+(shaders/common/sampling.glsl ``sample_phong``, seed 000 eq. 7)::
+
+    p(l) = (N + 1)/(2π) · max(r·l, 0)^N,   cos θ = (1 − ξ₁)^(1/(N+1)),  φ = 2π ξ₂
+
+about r, so that the mean of the radiance along the l's estimates
+P = (N + 1)/(2π) ∫ L(l) max(r·l, 0)^N dl, which the reference weights by the
+same F = Schlick(n·v). A direction below the surface (below the shading
+normal's plane or the triangle's own, as shaders/reference/paths.glsl) is
+rejected: it carries no light (radiance 0, not local, distant 0) and still
+counts in the pixel's mean, as the traced reference counts it; it is not folded
+back above the surface. The local/distant split is then made per sample along l
+exactly as along r for a mirror, and a path that meets a reflector again
+continues along a lobe sample of its own (the reference's paths do the same),
+up to :data:`TRACE_BOUNCES` traces. The lobe draws come from their own stream
+(seed ``[seed, LOBE_STREAM]``), so the pixel jitter is the mirror trace's.
+What the inference intersects with the EM geometry (``ray_direction``) stays
+the mirror direction r, the playback's lookup: the inferred maps are per-view
+maps of the lobe-averaged incident radiance, read by the playback's trilinear
+lookups along r. Not in the paper.
 """
 
 from __future__ import annotations
@@ -73,6 +98,44 @@ from envstudio.scene.graph import Scene
 #: Traces after the first reflector hit before a path returns black
 #: (methods/reference/tracing.py TRACE_BOUNCES, shaders/reference/paths.glsl).
 TRACE_BOUNCES = 3
+
+#: Second word of the lobe draws' seed ``[seed, LOBE_STREAM]`` (module docstring).
+LOBE_STREAM = 31
+
+
+def sample_phong(r, exponent: float, xi):
+    """Directions drawn from the normalised Phong lobe (N + 1)/(2π) max(r·l, 0)^N about r.
+
+    The reference's sampler (shaders/common/sampling.glsl ``sample_phong`` and
+    ``frame_around``): cos θ = (1 − ξ₁)^(1/(N+1)), φ = 2π ξ₂ about r.
+
+    Parameters
+    ----------
+    r
+        (n, 3) float unit lobe axes (mirror directions).
+    exponent
+        N > 0.
+    xi
+        (n, 2) float uniform numbers in [0, 1).
+
+    Returns
+    -------
+    (n, 3) float64
+        Unit directions.
+    """
+    r = np.asarray(r, dtype=np.float64).reshape(-1, 3)
+    xi = np.asarray(xi, dtype=np.float64).reshape(-1, 2)
+    c = np.power(1.0 - xi[:, 0], 1.0 / (float(exponent) + 1.0))
+    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+    phi = 2.0 * np.pi * xi[:, 1]
+    helper = np.zeros_like(r)
+    near_y = np.abs(r[:, 1]) >= 0.999
+    helper[~near_y, 1] = 1.0
+    helper[near_y, 0] = 1.0
+    t = np.cross(helper, r)
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    b = np.cross(r, t)
+    return (s * np.cos(phi))[:, None] * t + (s * np.sin(phi))[:, None] * b + c[:, None] * r
 
 
 @dataclass
@@ -121,7 +184,10 @@ class TracedView:
         Its unit shading normal, turned towards the viewer.
     ray_direction : (k, 3) float32, optional
         Its unit reflection direction r = reflect(−v, n): what EM inference
-        intersects with the EM geometry (seed 003 §4, "EM Representations").
+        intersects with the EM geometry (seed 003 §4, "EM Representations"); the
+        mirror direction also when the lobe is sampled (the playback's lookup).
+    phong_exponent : float
+        N of the sampled Phong lobe about r; 0: a mirror (module docstring).
     """
 
     camera: OrbitCamera
@@ -142,6 +208,7 @@ class TracedView:
     ray_point: npt.NDArray[np.float32] | None = None
     ray_normal: npt.NDArray[np.float32] | None = None
     ray_direction: npt.NDArray[np.float32] | None = None
+    phong_exponent: float = 0.0
 
     def incident(self) -> npt.NDArray[np.float64]:
         """(P, R, R, 3) incident specular layer α_L·L + (1 − α_L)·D (local over distant)."""
@@ -289,6 +356,27 @@ class SceneTracer:
         n[flip] = -n[flip]
         return n
 
+    def _face_normal(self, tri, directions):
+        """(n, 3) unit face normals of triangles ``tri``, turned to face against ``directions``."""
+        c = self.positions[tri]
+        f = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+        f /= np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-300)
+        flip = np.einsum("ij,ij->i", f, directions) > 0.0
+        f[flip] = -f[flip]
+        return f
+
+    def _lobe(self, tri, normals, r, directions, lobe):
+        """Phong-lobe directions l about r at reflector hits, and which are above the surface.
+
+        ``lobe`` is (N, numpy Generator); a direction below the shading normal's
+        plane or the hit triangle's own plane is not above (module docstring).
+        """
+        exponent, rng = lobe
+        lobe_dir = sample_phong(r, exponent, rng.random((len(r), 2)))
+        face = self._face_normal(tri, directions)
+        above = np.einsum("ij,ij->i", normals, lobe_dir) > 0.0
+        return lobe_dir, above & (np.einsum("ij,ij->i", face, lobe_dir) > 0.0)
+
     def _diffuse_radiance(self, albedo, normals):
         """(n, 3) albedo/π · max(E_sh9(n), 0)."""
         return albedo / np.pi * np.maximum(irradiance_sh9(self.sh9, normals), 0.0)
@@ -303,8 +391,12 @@ class SceneTracer:
         diffuse = self._diffuse_radiance(self.kd[part], n)
         return p + n * self.ray_offset, n, r, fresnel, diffuse
 
-    def _shade(self, tri, t, u, v, origins, directions, depth):
-        """(n, 3) radiance of traced hits (module docstring); ``depth`` traces left."""
+    def _shade(self, tri, t, u, v, origins, directions, depth, lobe=None):
+        """(n, 3) radiance of traced hits (module docstring); ``depth`` traces left.
+
+        ``lobe``: None, reflectors are mirrors; (N, Generator), a reflector hit
+        continues along one Phong-lobe sample about its mirror direction.
+        """
         out = np.zeros((len(tri), 3))
         miss = tri < 0
         if miss.any():
@@ -316,13 +408,19 @@ class SceneTracer:
         refl = ~miss & ~local
         if refl.any():
             o, d = origins[refl], directions[refl]
-            p, _, r, fresnel, diffuse = self._reflector_terms(
+            p, n, r, fresnel, diffuse = self._reflector_terms(
                 tri[refl], t[refl], u[refl], v[refl], o, d
             )
-            out[refl] = (1.0 - fresnel) * diffuse + fresnel * self.radiance(p, r, depth)
+            if lobe is None:
+                incident = self.radiance(p, r, depth)
+            else:
+                lobe_dir, above = self._lobe(tri[refl], n, r, d, lobe)
+                incident = np.zeros((len(lobe_dir), 3))
+                incident[above] = self.radiance(p[above], lobe_dir[above], depth, lobe)
+            out[refl] = (1.0 - fresnel) * diffuse + fresnel * incident
         return out
 
-    def radiance(self, origins, directions, depth: int | None = None):
+    def radiance(self, origins, directions, depth: int | None = None, lobe=None):
         """Radiance along rays through the whole scene.
 
         Parameters
@@ -331,6 +429,9 @@ class SceneTracer:
             (n, 3) float, world space; directions need not be unit length.
         depth
             Traces allowed (default :attr:`bounces`); 0 returns black.
+        lobe
+            None: reflectors met are mirrors; (N, numpy Generator): each continues
+            along a Phong-lobe sample of exponent N (module docstring).
 
         Returns
         -------
@@ -342,7 +443,7 @@ class SceneTracer:
         if depth <= 0 or len(origins) == 0:
             return np.zeros((len(origins), 3))
         hit = self._intersect(False, origins, directions)
-        return self._shade(*hit, origins, directions, depth - 1)
+        return self._shade(*hit, origins, directions, depth - 1, lobe)
 
     # -- one view -----------------------------------------------------------------------
 
@@ -394,7 +495,14 @@ class SceneTracer:
         pix = np.arange(size * size)
         return (pix, *camera_rays(camera, size, pix % size + 0.5, pix // size + 0.5))
 
-    def trace(self, camera: OrbitCamera, size: int = 256, samples: int = 4, seed: int = 0):
+    def trace(
+        self,
+        camera: OrbitCamera,
+        size: int = 256,
+        samples: int = 4,
+        seed: int = 0,
+        phong_exponent: float | None = None,
+    ):
         """Trace one view into its segmented layers.
 
         Parameters
@@ -406,7 +514,10 @@ class SceneTracer:
         samples
             Rays per pixel (≥ 1).
         seed
-            Seed of the pixel jitter.
+            Seed of the pixel jitter (and, with ``phong_exponent``, of the lobe draws).
+        phong_exponent
+            N of a glossy reflector: each reflector sample draws one direction of
+            the Phong lobe about r (module docstring); None or 0: mirrors.
 
         Returns
         -------
@@ -414,6 +525,10 @@ class SceneTracer:
         """
         if size < 1 or samples < 1:
             raise ValueError(f"size {size} and samples {samples} must be at least 1")
+        exponent = float(phong_exponent or 0.0)
+        if not (math.isfinite(exponent) and exponent >= 0.0):
+            raise ValueError(f"phong exponent {exponent:g}: expected N > 0, or 0 for a mirror")
+        lobe = (exponent, np.random.default_rng([seed, LOBE_STREAM])) if exponent else None
         start = time.perf_counter()
         pix, origins, dirs = self.primary_rays(camera, size, samples, seed)
         tri, t, u, v = self._intersect(False, origins, dirs)
@@ -430,14 +545,21 @@ class SceneTracer:
         p, nrm, r, fresnel, diffuse = self._reflector_terms(
             tri[ri], t[ri], u[ri], v[ri], origins[ri], dirs[ri]
         )
-        hit2 = self._intersect(False, p, r)
-        incident = self._shade(*hit2, p, r, self.bounces - 1)
-        is_local = (hit2[0] >= 0) & (self.part[np.maximum(hit2[0], 0)] >= 0)
+        if lobe is None:
+            lobe_dir, above = r, np.ones(len(ri), dtype=bool)
+        else:  # one lobe direction per sample; those below the surface carry nothing
+            lobe_dir, above = self._lobe(tri[ri], nrm, r, dirs[ri], lobe)
+        go = np.flatnonzero(above)
+        hit2 = self._intersect(False, p[go], lobe_dir[go])
+        incident = np.zeros((len(ri), 3))
+        incident[go] = self._shade(*hit2, p[go], lobe_dir[go], self.bounces - 1, lobe)
+        is_local = np.zeros(len(ri), dtype=bool)
+        is_local[go] = (hit2[0] >= 0) & (self.part[np.maximum(hit2[0], 0)] >= 0)
         distant = incident.copy()
         if is_local.any():
             li = np.flatnonzero(is_local)
-            hit3 = self._intersect(True, p[li], r[li])
-            distant[li] = self._shade(*hit3, p[li], r[li], 0)
+            hit3 = self._intersect(True, p[li], lobe_dir[li])
+            distant[li] = self._shade(*hit3, p[li], lobe_dir[li], 0)
         radiance[ri] = (1.0 - fresnel) * diffuse + fresnel * incident
 
         n_parts, npix = len(self.part_names), size * size
@@ -485,6 +607,7 @@ class SceneTracer:
             ray_point=p.astype(np.float32),
             ray_normal=nrm.astype(np.float32),
             ray_direction=r.astype(np.float32),
+            phong_exponent=exponent,
         )
 
 
@@ -495,6 +618,7 @@ def trace_view(
     samples: int = 4,
     seed: int = 0,
     bounces: int = TRACE_BOUNCES,
+    phong_exponent: float | None = None,
 ) -> TracedView:
     """One view's segmented layers (builds a :class:`SceneTracer`; reuse one for many views)."""
-    return SceneTracer(scene, bounces).trace(camera, size, samples, seed)
+    return SceneTracer(scene, bounces).trace(camera, size, samples, seed, phong_exponent)
