@@ -68,9 +68,10 @@ def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(g
     store, blend = method._loaded.orbit, method.last_blend
     assert len(blend.views) == 4 and store.done() == set(blend.views)
     assert f"4 of {store.total} views baked" in method.status_line()
-    stamps = {p: p.stat().st_mtime_ns for p in store.parts.iterdir()}
+    views_folder = store.view_path(0).parent
+    stamps = {p: p.stat().st_mtime_ns for p in views_folder.iterdir()}
     session.render_offscreen(method, (R, R))  # baked once: nothing is baked again
-    assert {p: p.stat().st_mtime_ns for p in store.parts.iterdir()} == stamps
+    assert {p: p.stat().st_mtime_ns for p in views_folder.iterdir()} == stamps
     # the same four views' maps as a 2 x 2 grid bake file, played the file's way
     shell, count = store.shell(), len(store.space["azimuths"])
     a0, e0 = 0, int(np.searchsorted(store.space["elevations"], 27.0)) - 1  # the cell's corner
@@ -123,10 +124,10 @@ def test_a_background_bake_stopped_midway_keeps_whole_views_and_resumes(cache):
     job.stop()
     done = store.done()
     assert len(done) >= 2 and not job.running
-    assert all(p.suffix == ".npz" for p in store.parts.iterdir())  # no half-written file
+    names = sorted(p.name for p in store.view_path(0).parent.iterdir())
+    assert names == [store.view_path(v).name for v in sorted(done)]  # no half-written file
     assert all(store.load(v) is not None for v in done)
-    nearest = sorted(done)[0]
-    first = store.parts / f"view-{nearest:05d}.npz"
+    first = store.view_path(sorted(done)[0])
     stamp = first.stat().st_mtime_ns
     again = OrbitBakeJob(store, "room")
     again.request(camera, [])

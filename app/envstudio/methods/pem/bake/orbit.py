@@ -3,23 +3,25 @@
 Seed 003 bakes a 100-view arc; a viewer's orbit camera reaches every azimuth and
 elevations to ±89°. :class:`OrbitStore` is the PEM of the whole orbit
 (:func:`~.views.orbit_views` at :data:`ORBIT_STEP`, the bake parameters of the
-shipped arc bake) kept as a parts folder in the user cache: each view is one
-verified part file (:mod:`.bake`'s resume format), written atomically as soon as
-it is baked, under a key of the scene file, its environment's pixels, the
+shipped arc bake) kept in the user cache: each view is a one-view ``.pem``
+(:mod:`.pem_file`: half floats, zstd, checksummed), written atomically as soon as
+it is baked and holding the key of the scene file, its environment's pixels, the
 parameters and the view space. Views are baked when they are first needed,
 nearest the camera first (:meth:`OrbitStore.bake`; in the viewer a background
 process, methods/pem/orbit_job.py), and never assembled into one ``.pem``: at
-10° spacing the orbit is 612 views, about 2 GB as float32 maps, so playback
-reads the few views it blends from their parts (methods/pem/resident.py).
+5° spacing the orbit is 2664 views, so playback reads the few views it blends
+from their files (methods/pem/resident.py).
 """
 
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from envstudio.errors import InputFileError
 from envstudio.io.atomic import atomic_path
 from envstudio.methods.pem.bake.bake import (
     BakeReport,
@@ -31,7 +33,7 @@ from envstudio.methods.pem.bake.bake import (
 )
 from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
 from envstudio.methods.pem.bake.infer import distant_box, local_ellipsoid
-from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.methods.pem.bake.pem_file import PemBake, load_pem, save_pem
 from envstudio.methods.pem.bake.views import orbit_views
 from envstudio.scene.camera import OrbitCamera
 
@@ -40,11 +42,15 @@ __all__ = ["ORBIT_BAKE", "ORBIT_STEP", "OrbitStore", "nearest_first", "orbit_cac
 #: (azimuth, elevation) spacing of the orbit's views in degrees, chosen by measurement:
 #: the coarsest whose playback midway between samples is within 1 dB of the 2× denser
 #: grid's (docs/pem/orbit.md).
-ORBIT_STEP = (10.0, 10.0)
+ORBIT_STEP = (5.0, 5.0)
 
 #: The orbit's bake parameters: those of the shipped arc bake (assets/pem/room.pem), the
 #: three maps of seed 003 (no PTM: Figure 7's comparison is made on the arc).
 ORBIT_BAKE = {"size": 256, "samples": 4, "em_size": 64, "ptm": False}
+
+
+#: zstd level of a view's file: fast (level 19, the bake file's, takes seconds a view).
+VIEW_ZSTD_LEVEL = 3
 
 
 def orbit_cache_dir() -> Path:
@@ -102,8 +108,10 @@ class OrbitStore:
     Attributes
     ----------
     folder : Path
-        ``root/orbit-<scene>-<key>``: ``orbit.pem.parts/`` (the views) and
-        ``shell.npz`` (the geometry playback needs).
+        ``root/orbit-<scene>-<key>``: ``views/view-NNNNN.pem`` (each baked view as a
+        one-view ``.pem``: half floats, zstd, checksummed, about a third of the
+        bake's float32 part), ``shell.npz`` (the geometry playback needs) and, while a
+        view is being baked, the bake's resume folder ``orbit.pem.parts/``.
     total : int
         Views of the orbit.
     """
@@ -140,12 +148,26 @@ class OrbitStore:
 
     # -- what is baked -----------------------------------------------------------------------
 
+    def view_path(self, view: int) -> Path:
+        """``views/view-NNNNN.pem``: one baked view, a one-view bake file."""
+        return self.folder / "views" / f"view-{view:05d}.pem"
+
     def done(self) -> set[int]:
-        """Indices of the views whose part file is there (not yet verified)."""
-        if not self.parts.is_dir():
-            return set()
-        names = (p.name for p in self.parts.glob("view-*.npz"))
+        """Indices of the views whose file is there (not yet verified)."""
+        names = (p.name for p in (self.folder / "views").glob("view-*.pem"))
         return {int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()}
+
+    def _read(self, view: int) -> PemBake | None:
+        """The one-view bake of ``view`` if it is there, intact and of this orbit."""
+        path = self.view_path(view)
+        if not path.exists():
+            return None
+        try:
+            bake = load_pem(path)
+        except InputFileError:
+            return None
+        identity = (bake.parameters.get("orbit_key"), bake.parameters.get("orbit_view"))
+        return bake if identity == (self.plan.key, view) else None
 
     def sees_reflector(self, view: int) -> bool:
         """Whether the baked ``view`` saw a reflector part (a finite fit PSNR).
@@ -153,34 +175,54 @@ class OrbitStore:
         Raises
         ------
         KeyError
-            ``view`` is not baked (or its part is damaged).
+            ``view`` is not baked (or its file is damaged).
         """
-        if view not in self._seen:
-            task = self.plan.tasks[view]
-            part = load_part(self.parts / part_name(task), self.plan.key, task)
-            if part is None:
-                raise KeyError(f"view {view} of {self.parts} is not baked")
-            self._seen[view] = bool(np.isfinite(part["psnr_distant"]).any())
+        if view not in self._seen and self.load(view) is None:
+            raise KeyError(f"view {view} of {self.folder} is not baked")
         return self._seen[view]
 
     def load(self, view: int) -> dict[str, list[np.ndarray]] | None:
-        """The maps of ``view``, or None where its part is missing, foreign or damaged.
+        """The maps of ``view``, or None where its file is missing, foreign or damaged.
 
         Returns
         -------
         dict or None
-            Model → list over levels k of (P, 6, n_k, n_k, C) float32.
+            Model → list over levels k of (P, 6, n_k, n_k, C) float32 (stored as half
+            floats, as every ``.pem``).
         """
-        task = self.plan.tasks[view]
-        part = load_part(self.parts / part_name(task), self.plan.key, task)
-        if part is None:
+        bake = self._read(view)
+        if bake is None:
             return None
-        self._seen[view] = bool(np.isfinite(part["psnr_distant"]).any())
-        levels = len(self.shell().maps["distant"])
-        return {m: [part[f"{m}_{k}"] for k in range(levels)] for m in self.plan.models}
+        self._seen[view] = bool(np.isfinite(bake.psnr["distant"]).any())
+        return {m: [level[0] for level in levels] for m, levels in bake.maps.items()}
+
+    def _keep(self, view: int, result: dict) -> None:
+        """Write a baked view as its one-view ``.pem`` and drop its resume part."""
+        shell, levels = self.shell(), int(self.plan.parameters["levels"])
+        bake = replace(
+            shell,
+            parameters={**shell.parameters, "orbit_key": self.plan.key, "orbit_view": view},
+            maps={m: [result[f"{m}_{k}"][None] for k in range(levels)] for m in self.plan.models},
+            psnr={m: np.asarray(result[f"psnr_{m}"])[None] for m in self.plan.models},
+            playback_psnr={
+                n[9:]: np.asarray(result[n], np.float64).reshape(1)
+                for n in result
+                if n.startswith("playback_")
+            },
+            cameras=shell.cameras[view : view + 1],
+            view_space={
+                **{k: v for k, v in self.space.items() if k != "closed"},
+                "kind": "arc",
+                "azimuths": [float(shell.cameras[view, 0])],
+                "elevations": [float(shell.cameras[view, 1])],
+            },
+        )
+        self.view_path(view).parent.mkdir(parents=True, exist_ok=True)
+        save_pem(self.view_path(view), bake, level=VIEW_ZSTD_LEVEL)
+        (self.parts / part_name(self.plan.tasks[view])).unlink(missing_ok=True)
 
     def bake(self, views: list[int], workers: int | None = 1, bar=None) -> BakeReport:
-        """Bake ``views`` (those already saved are verified and kept), in this order.
+        """Bake those of ``views`` not baked yet, in this order, each kept as it finishes.
 
         Parameters
         ----------
@@ -193,6 +235,12 @@ class OrbitStore:
             A tqdm bar over the views.
         """
         self.folder.mkdir(parents=True, exist_ok=True)
+        for view in self._resume_parts():  # baked, then interrupted before it was kept
+            task = self.plan.tasks[view]
+            part = load_part(self.parts / part_name(task), self.plan.key, task)
+            if part is not None:
+                self._keep(view, part)
+        done = self.done()
         return run_bake(
             self.scene_name,
             lambda camera: orbit_views(camera, *self.step),
@@ -201,11 +249,16 @@ class OrbitStore:
             gl_lookups=self.gl_lookups,
             workers=workers,
             bar=bar,
-            only=list(views),
+            on_view=self._keep,
+            only=[v for v in dict.fromkeys(views) if v not in done],
             assemble=False,
             probe=False,
             **self.parameters,
         )
+
+    def _resume_parts(self) -> list[int]:
+        names = (p.name for p in self.parts.glob("view-*.npz")) if self.parts.is_dir() else ()
+        return [int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()]
 
     # -- what playback needs ---------------------------------------------------------------------
 

@@ -265,15 +265,18 @@ def _unshuffle(raw: bytes, itemsize: int) -> bytes:
     return np.frombuffer(raw, np.uint8).reshape(itemsize, -1).T.tobytes()
 
 
-def save_pem(path: str | os.PathLike, bake: PemBake) -> Path:
+def save_pem(path: str | os.PathLike, bake: PemBake, level: int = 19) -> Path:
     """Write ``bake`` to ``path`` atomically (module docstring for the format).
+
+    ``level`` is zstd's (19: small and slow, for files that are shipped; a full
+    orbit's views, written as they are baked, take 3).
 
     Returns
     -------
     Path
         ``path``.
     """
-    compressor = zstandard.ZstdCompressor(level=19)
+    compressor = zstandard.ZstdCompressor(level=level)
     entries, frames, offset = [], [], 0
     for name, array in _arrays(bake).items():
         raw = array.astype(array.dtype.newbyteorder("<"), copy=False).tobytes()
