@@ -233,3 +233,13 @@ def test_bad_input_is_one_line(tmp_path, capsys, monkeypatch, extra, words):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and words in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_a_bake_that_would_not_fit_in_memory_is_refused_in_one_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("ENVSTUDIO_MEMORY_MB", "200")
+    out = tmp_path / "big.pem"
+    argv = ["bake", "pem", "--scene", "room", "--views", "100", "--em-size", "256", "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "MB needed" in err and "200 MB available" in err, err
+    assert "100 views" in err and not any(tmp_path.iterdir())

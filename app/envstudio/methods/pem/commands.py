@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 
 import numpy as np
@@ -21,6 +22,7 @@ from tqdm import tqdm
 
 from envstudio.errors import OutputFileError, ParameterError
 from envstudio.io.atomic import check_output_path
+from envstudio.io.memory import available_memory
 from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.methods.pem.bake import bake
 from envstudio.methods.pem.bake.bake import BakeReport, parts_folder
@@ -156,6 +158,47 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--workers {args.workers}: expected 0 (in-process) or more")
 
 
+#: Bytes a worker holds per scene triangle (Embree's BVH, the hull and the mesh arrays).
+BYTES_PER_TRIANGLE = 512
+#: Vectors of the size of a view's unknowns the least-squares solve keeps (float64).
+SOLVE_VECTORS = 12
+
+
+def memory_estimate(scene, views: int, args: argparse.Namespace, workers: int) -> dict:
+    """A bake's peak memory, bytes: its workers' and, at the end, the whole bake's maps.
+
+    Per worker: the scene's triangles (:data:`BYTES_PER_TRIANGLE`), the solve's
+    vectors over one view's unknowns (every level of every part's maps: 10 channels
+    over seed 003's three models, 13 with the PTM) and the trace's rays (R² × samples
+    × 256 bytes). The parent assembles every view's float32 maps before writing the file. A coarse
+    upper bound, for refusing a bake that cannot fit (issue 31, "Bad input").
+    """
+    triangles = sum(node.mesh.triangle_count for node in scene.nodes)
+    parts = len(scene.reflectors())
+    texels = sum(6 * (args.em_size >> k) ** 2 for k in range(int(np.log2(args.em_size)) + 1))
+    unknowns = parts * texels * (13 if getattr(args, "ptm", True) else 10)  # PTM: 3 more
+    worker = triangles * BYTES_PER_TRIANGLE + SOLVE_VECTORS * unknowns * 8
+    worker += args.size**2 * args.samples * 256
+    return {"workers": workers * worker, "maps": views * unknowns * 4, "worker": worker}
+
+
+def _check_memory(args: argparse.Namespace, views: int) -> None:
+    """Refuse, in one line with the estimate, a bake that would not fit in memory."""
+    scene = load_scene(args.scene)
+    workers = (os.cpu_count() or 1) if args.workers is None else max(1, args.workers)
+    need = memory_estimate(scene, views, args, min(workers, views))
+    total, available = need["workers"] + need["maps"], available_memory()
+    if total > available:
+        mb, triangles = 2**20, sum(n.mesh.triangle_count for n in scene.nodes)
+        raise ParameterError(
+            f"bake pem: about {total / mb:,.0f} MB needed ({min(workers, views)} workers × "
+            f"{need['worker'] / mb:,.0f} MB for {triangles:,} "
+            f"triangles and {args.em_size}² EMs, and {need['maps'] / mb:,.0f} MB of maps for "
+            f"{views} views), {available / mb:,.0f} MB available: use a coarser mesh, fewer "
+            "--views, a smaller --em-size or fewer --workers"
+        )
+
+
 def _coverage_warning(space: ViewSpace, camera: OrbitCamera) -> str:
     """One line: which of the scene's orbit cameras the bake's views leave outside (issue 31)."""
     cameras = orbit_views(camera, *ORBIT_STEP).cameras()
@@ -198,6 +241,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
         views(OrbitCamera())  # views that coincide, elevations past ±89°: before any work
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
+    _check_memory(args, args.views * elevations)
     with tqdm(unit="view", desc="pem", leave=False, disable=not sys.stderr.isatty()) as bar:
         try:
             report = run_bake(
