@@ -40,7 +40,7 @@ from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.lookups_gl import GlLookups
-from envstudio.methods.pem.orbit_job import OrbitBakeJob
+from envstudio.methods.pem.orbit_job import FAILED_RETRY_S, OrbitBakeJob
 from envstudio.methods.pem.resident import ResidentViews
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import (
@@ -526,6 +526,8 @@ class PemMethod(Method):
         done = len(job.done() if job is not None else orbit.done())
         line = f"full orbit: {done} of {orbit.total} views baked"
         left = None if job is None else job.seconds_left()
+        if job is not None and job.failure:
+            line += f" ({job.failure}; retried every {FAILED_RETRY_S:.0f} s)"
         if job is not None and job.running:
             line += " (baking nearest the camera first" + (
                 f", about {left / 60:.0f} min left)" if left is not None else ")"

@@ -19,12 +19,14 @@ import time
 from envstudio.methods.pem.bake.orbit import OrbitStore, nearest_first
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["POLL_S", "RESTART_S", "OrbitBakeJob"]
+__all__ = ["FAILED_RETRY_S", "POLL_S", "RESTART_S", "OrbitBakeJob"]
 
 #: Seconds between looks at the parts folder.
 POLL_S = 0.5
 #: Least seconds between restarts of the child in a new order.
 RESTART_S = 2.0
+#: Seconds before a child that failed is started again.
+FAILED_RETRY_S = 30.0
 
 
 def _bake_in_order(
@@ -58,6 +60,9 @@ class OrbitBakeJob:
         self._polled = time.perf_counter()
         self._started = 0.0
         self._done_at_start = len(self._done)
+        #: Why the last child stopped before the orbit was complete ("" when it did not).
+        self.failure = ""
+        self._ended: float | None = None  # when the child was first seen to have ended
 
     def done(self) -> set[int]:
         """The views baked so far (refreshed at most every :data:`POLL_S`)."""
@@ -83,6 +88,14 @@ class OrbitBakeJob:
         missing = [v for v in range(self.store.total) if v not in done]
         if not missing:
             return
+        if self._process is not None and not self.running:  # it ended: finished or failed
+            code, now = self._process.exitcode, time.perf_counter()
+            if self._ended is None:
+                self._ended = now
+                self.failure = "" if code == 0 else f"the background bake stopped (exit {code})"
+            if now - self._ended < (RESTART_S if code == 0 else FAILED_RETRY_S):
+                return
+            self._process, self._ended = None, None
         if self.running:
             upcoming = [v for v in self._order if v not in done][:2]
             late = [v for v in needed if v not in done and v not in upcoming]
@@ -120,4 +133,4 @@ class OrbitBakeJob:
         if self._process is not None:
             self._process.terminate()
             self._process.join(timeout=5.0)
-            self._process = None
+            self._process, self._ended = None, None
