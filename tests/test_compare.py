@@ -502,9 +502,13 @@ def test_on_a_convex_sphere_the_scene_only_error_is_noise_and_approximation_is_s
 
     With a lobe narrow enough to stay above the horizon (at N = 2 the traced reference is
     20-40 % darker at the rim, where half the lobe enters the sphere: self-occlusion that
-    no environment map shows, and scene-only error indeed)."""
+    no environment map shows, and scene-only error indeed).
+
+    At 24² (it was 32², 1.8x the time): the per-pixel noise and both medians compared are
+    the same there (measured: noise 1.02 % against 1.01 %, scene-only error 0.00 and
+    |approximation - scene error| 0.003 of the noise at both sizes; asserted under 2)."""
     out = tmp_path / "decomposed"
-    args = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--methods", "mirror"]
+    args = ["--size", "24x24", "--frames", "2", "--warmup", "1", "--methods", "mirror"]
     narrow = ["--param", "phong_exponent=200", "--param", "trace=true", "--param", "kd=0"]
     budget = ["--param", "max_samples=1024"]
     command = ["compare", "--scene", str(small_scene), "--out", str(out), *args, *narrow, *budget]
