@@ -5,7 +5,8 @@ PEM and a static EM at views the bake never sampled. :func:`measure` renders
 ``pem`` with each EM model at such views (midway between samples, and 10° and
 20° above the arc) and compares them with a ray trace at that exact view (the
 bake's own tracer, methods/pem/bake/trace.py, whose composite is the ground truth of the
-playback), over the pixels the reflector covers fully: PSNR and FLIP of the
+playback; with the bake's Phong lobe when it was baked glossy, issue 31 part 5),
+over the pixels the reflector covers fully: PSNR and FLIP of the
 displayed images (core/metrics.py, as ``compare``) and the linear PSNR of the
 bake's numbers (peak = the trace's maximum there); the pixels are those one part
 covers fully (the bake's interior pixels, where playback and trace see the same
@@ -168,12 +169,13 @@ def measure(
     space = bake.view_space
     views = offmanifold_views(space) if views is None else views
     tracer = SceneTracer(session.scene)
+    glossy = bake.parameters.get("phong_exponent")  # the lobe the bake traced (issue 31.5)
     display = session.renderer.display
     exposure, tonemap = float(display["exposure"]), str(display["tonemap"])
     results = []
     for view in views:
         camera = _camera(space, view)
-        traced = tracer.trace(camera, size, samples, seed)
+        traced = tracer.trace(camera, size, samples, seed, glossy)
         mask = (traced.coverage >= 1.0 - 1e-6).any(axis=0)
         reference = traced.composite.astype(np.float64)
         result = ViewResult(view, pixels=int(mask.sum()))
@@ -227,6 +229,7 @@ def wobble(
     bake = method.bake
     space = bake.view_space
     tracer = SceneTracer(session.scene)
+    glossy = bake.parameters.get("phong_exponent")  # the lobe the bake traced (issue 31.5)
     display = session.renderer.display
     exposure, tonemap = float(display["exposure"]), str(display["tonemap"])
     start = float(space["azimuths"][0])
@@ -237,7 +240,7 @@ def wobble(
     for k in range(frames):
         view = OffManifoldView(f"sweep {k}", start + k * step, elevation)
         camera = _camera(space, view)
-        traced = tracer.trace(camera, size, samples, seed=11)  # one jitter: no noise flicker
+        traced = tracer.trace(camera, size, samples, 11, glossy)  # one jitter: no flicker
         masks.append((traced.coverage >= 1.0 - 1e-6).any(axis=0))
         images["trace"].append(to_ldr(traced.composite, exposure, tonemap) / 255.0)
         for model in models:
