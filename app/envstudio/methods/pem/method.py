@@ -575,15 +575,24 @@ class PemMethod(Method):
         """The bake on show: views resident, texture memory, the one-off upload, the blend."""
         if self._loaded is None:
             return {"bake": self._missing or "none"}
-        textures = self._loaded.textures
-        mb = textures.megabytes
+        textures, orbit = self._loaded.textures, self._loaded.orbit
+        blended = 0 if self.last_blend is None else len(self.last_blend.views)
+        if orbit is not None:  # the full orbit: a few views resident, moved in as needed
+            return {
+                "bake": f"full orbit, {orbit.describe()}",
+                "views_baked": len(orbit.done()),
+                "views_resident": len(textures.resident),
+                "texture_mb": round(textures.megabytes, 2),
+                "view_switch_upload_ms": round(textures.upload_ms, 2),
+                "views_blended": blended,
+            }
         return {
             "bake": str(self._loaded.path),
             "views_resident": self._loaded.bake.views,
-            "texture_mb": round(mb, 2),
+            "texture_mb": round(textures.megabytes, 2),
             "upload_ms_once": round(textures.upload_ms, 2),
             "view_switch_upload_ms": 0.0,
-            "views_blended": 0 if self.last_blend is None else len(self.last_blend.views),
+            "views_blended": blended,
         }
 
     def panel_images(self, exposure: float, tonemap: str) -> list[tuple[str, moderngl.Texture]]:
