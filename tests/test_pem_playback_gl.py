@@ -163,6 +163,30 @@ def test_blended_playback_between_views_and_the_hull_split(gl_ctx, room):
     session.release()
 
 
+def test_a_grid_bake_plays_its_sample_and_blends_its_cell_bilinearly(gl_ctx, room):
+    """Issue 31: a 2 x 2 grid (elevation-major views): at a corner sample the playback is that
+    view's A x; at the cell's centre the four views' A x with weight 1/4 each."""
+    scene, box, ellipsoids = room
+    bake = _fake_bake(scene, box, ellipsoids, views=4, seed=2)
+    cam = scene.camera
+    bake.view_space.update(
+        kind="grid",
+        azimuths=[cam.azimuth, cam.azimuth + 2.0],
+        elevations=[cam.elevation, cam.elevation + 2.0],
+    )
+    session, method, hdr = _play(gl_ctx, scene, bake, path=1.0, path_elevation=1.0)
+    assert dict(zip(method.last_blend.views, method.last_blend.weights, strict=True))[3] > 1 - 1e-9
+    want, mask = _expected(gl_ctx, scene, bake, session.camera, [(3, 1.0)])
+    assert mask.sum() > 250 and _relative_error(hdr, want, mask) < 1e-3
+    method.values.update({"path": 0.5, "path_elevation": 0.5})
+    session.render_offscreen(method, (R, R))
+    assert sorted(method.last_blend.views) == [0, 1, 2, 3]
+    assert np.allclose(method.last_blend.weights, 0.25)
+    want, mask = _expected(gl_ctx, scene, bake, session.camera, [(v, 0.25) for v in range(4)])
+    assert _relative_error(session.read_hdr().astype(np.float64), want, mask) < 1e-3
+    session.release()
+
+
 def test_texgen_matches_the_numpy_geometry(gl_ctx, programs):
     rng = np.random.default_rng(5)
     box = BoxGeometry(lo=np.array([-4.0, -0.5, -4.0]), hi=np.array([4.0, 7.5, 4.0]))
