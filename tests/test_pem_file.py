@@ -261,3 +261,18 @@ def test_the_subdivided_teapot_matches_its_trace_as_well_as_the_shipped_one(tmp_
         for i, scene in enumerate(("room", finer))
     ]
     assert np.isfinite(scores).all() and abs(scores[1] - scores[0]) <= 1.0, scores
+
+
+def test_the_solve_tolerance_is_a_bake_parameter_only_when_it_is_not_the_default(capsys):
+    """--rtol (docs/pem/paper.md): absent from the parameters and the key at the default, so
+    bakes made before it resume and compare bit for bit; recorded otherwise; bad values refused."""
+    from envstudio.methods.pem.bake.bake import SOLVE_RTOL, plan_bake
+
+    before = plan_bake("room", _arc(1), lookups="cpu")
+    same = plan_bake("room", _arc(1), lookups="cpu", rtol=SOLVE_RTOL)
+    faster = plan_bake("room", _arc(1), lookups="cpu", rtol=1e-3)
+    assert "rtol" not in before.parameters and same.key == before.key
+    assert faster.parameters["rtol"] == 1e-3 and faster.key != before.key
+    assert faster.tasks[0].rtol == 1e-3
+    assert main(["bake", "pem", "--scene", "room", "--rtol", "2", "-o", "x.pem"]) == 2
+    assert "--rtol 2: expected a relative residual in (0, 1)" in capsys.readouterr().err

@@ -98,6 +98,12 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         "mirrors; docs/pem)",
     )
     parser.add_argument(
+        "--rtol",
+        type=float,
+        help="the MIP solves' conjugate-gradient tolerance (default 1e-6; 1e-3 is five to "
+        "seven times faster with the same playback to 0.01 dB, docs/pem/paper.md)",
+    )
+    parser.add_argument(
         "--no-ptm",
         dest="ptm",
         action="store_false",
@@ -142,6 +148,9 @@ def _check(args: argparse.Namespace) -> None:
     exponent = getattr(args, "phong_exponent", None)
     if exponent is not None and not (math.isfinite(exponent) and 0.0 < exponent <= 1e7):
         raise ParameterError(f"--phong-exponent {exponent:g}: expected an exponent in (0, 1e7]")
+    rtol = getattr(args, "rtol", None)
+    if rtol is not None and not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
+        raise ParameterError(f"--rtol {rtol:g}: expected a relative residual in (0, 1)")
     if getattr(args, "elevations", 1) < 1:
         raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
@@ -259,6 +268,7 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 ptm=getattr(args, "ptm", True),
                 coupling=getattr(args, "coupling", 0.0),
                 coupling_passes=getattr(args, "coupling_passes", 2),
+                rtol=getattr(args, "rtol", None),
                 phong_exponent=getattr(args, "phong_exponent", None),
             )
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent
