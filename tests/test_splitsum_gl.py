@@ -6,12 +6,13 @@ import shutil
 import numpy as np
 import pytest
 
-from envstudio.core import ggx, latlong
+from envstudio.core import latlong
 from envstudio.core.cubemap import texel_directions
 from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.methods.splitsum import dfg
-from envstudio.methods.splitsum.method import level_alphas, level_of
+from envstudio.methods.splitsum.method import level_alphas
+from envstudio.methods.splitsum.numpy_reference import ggx_integral_and_split_sum
 from envstudio.prefilter import brute_force, kernels
 from envstudio.scene.environment import Environment
 from test_render_gl import render, six_colour_environment, sphere_geometry, sphere_scene
@@ -117,31 +118,6 @@ def _lamp_environment() -> np.ndarray:
     return radiance
 
 
-def _ggx_integrals(radiance, n, v, alpha, levels):
-    """NumPy sums over every texel (exact solid angles) for unit normals n, views v (m, 3):
-    the GGX BRDF of the reference (F = 1) times n·l, and Karis's split sum: the lobe
-    D(h)/4 ⟨r, l⟩ about r = reflect(−v, n) normalised, at the α_k of the two ``levels`` that
-    α lies between, blended as the method does, times the directional albedo A + B."""
-    d = latlong.texel_directions(radiance.shape[0]).reshape(-1, 3)
-    dw = latlong.texel_solid_angles(radiance.shape[0]).reshape(-1)
-    L = radiance.reshape(-1, 3)
-    n_dot_v = np.sum(n * v, -1, keepdims=True)
-    n_dot_l, r_dot_l = n @ d.T, (2 * n_dot_v * n - v) @ d.T
-    h = v[:, None, :] + d[None]
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    lit = np.maximum(n_dot_l, 0.0)
-    brdf_cos = ggx.distribution(np.einsum("pk,ptk->pt", n, h), alpha)
-    brdf_cos *= ggx.smith_g2(lit, n_dot_v, alpha) / (4 * n_dot_v)
-    truth = np.where(n_dot_l > 0, brdf_cos, 0.0) * dw @ L
-    k, t = level_of(alpha, len(levels))
-    prefiltered = 0.0
-    for level, weight in ((k, 1 - t), (k + 1, t)):
-        lobe = ggx.distribution(np.sqrt((1 + r_dot_l) / 2), levels[level]) * r_dot_l
-        lobe = np.where(r_dot_l > 0, lobe, 0.0)
-        prefiltered = prefiltered + weight * (lobe * dw @ L) / (lobe @ dw)[:, None]
-    return truth, prefiltered * dfg.dfg_entries(n_dot_v[:, 0], alpha, 4096).sum(1, keepdims=True)
-
-
 @pytest.mark.parametrize("alpha", [0.25, 1.0])
 def test_whole_image_is_the_numpy_split_sum_and_lobe_samples_the_ggx_integral(gl_ctx, alpha):
     """Issue 30: every pixel of a 32² sphere against NumPy integrals over the lamp map. At
@@ -155,7 +131,7 @@ def test_whole_image_is_the_numpy_split_sum_and_lobe_samples_the_ggx_integral(gl
     hit, normal, view = sphere_geometry(session.camera, size)
     core = hit & (np.sum(normal * view, -1) > 0.3)
     levels = level_alphas(int(FAST["chain_size"]))
-    truth, split_sum = _ggx_integrals(radiance, normal[core], view[core], alpha, levels)
+    truth, split_sum = ggx_integral_and_split_sum(radiance, normal[core], view[core], alpha, levels)
     for image, expected in ((split, split_sum), (sampled, truth)):
         error = np.abs(image[core] - expected) / expected
         assert np.median(error) < 0.03 and np.percentile(error, 95) < 0.05

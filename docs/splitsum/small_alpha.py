@@ -23,11 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from envstudio.core import ggx, latlong
 from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
-from envstudio.methods.splitsum import dfg
-from envstudio.methods.splitsum.method import level_alphas, level_of
+from envstudio.methods.splitsum.method import level_alphas
+from envstudio.methods.splitsum.numpy_reference import ggx_integral_and_split_sum
 from envstudio.prefilter.brute_force import downsample_latlong
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
@@ -56,31 +55,6 @@ def sphere_pixels(
     hit = disc > 0
     normal = origin + (-b - np.sqrt(np.where(hit, disc, 0.0)))[..., None] * direction
     return hit, normal, -direction
-
-
-def numpy_split_sum(radiance, n, v, alpha, levels):
-    """(m, 3) split sum and (m, 3) GGX integral (F = 1) for normals n, views v (m, 3)."""
-    d = latlong.texel_directions(radiance.shape[0]).reshape(-1, 3)
-    dw = latlong.texel_solid_angles(radiance.shape[0]).reshape(-1)
-    L = radiance.reshape(-1, 3)
-    n_dot_v = np.sum(n * v, -1, keepdims=True)
-    n_dot_l, r_dot_l = n @ d.T, (2 * n_dot_v * n - v) @ d.T
-    h = v[:, None, :] + d[None]
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    brdf_cos = ggx.distribution(np.einsum("pk,ptk->pt", n, h), alpha)
-    brdf_cos *= ggx.smith_g2(np.maximum(n_dot_l, 0.0), n_dot_v, alpha) / (4 * n_dot_v)
-    truth = np.where(n_dot_l > 0, brdf_cos, 0.0) * dw @ L
-    k, t = level_of(alpha, len(levels))
-    prefiltered = 0.0
-    for level, weight in ((k, 1 - t), (k + 1, t)):
-        if levels[level] == 0.0:
-            prefiltered = prefiltered + weight * L[np.argmax(r_dot_l, axis=1)]
-            continue
-        lobe = ggx.distribution(np.sqrt((1 + r_dot_l) / 2), levels[level]) * r_dot_l
-        lobe = np.where(r_dot_l > 0, lobe, 0.0)
-        prefiltered = prefiltered + weight * (lobe * dw @ L) / (lobe @ dw)[:, None]
-    albedo = dfg.dfg_entries(n_dot_v[:, 0], alpha, 4096).sum(1, keepdims=True)
-    return prefiltered * albedo, truth
 
 
 def main() -> None:
@@ -116,7 +90,7 @@ def main() -> None:
         session.renderer.display["background"] = False
         session.render_offscreen(method, (args.size, args.size))
         gl = session.read_hdr()[pick[:, 0], pick[:, 1]]
-        split, truth = numpy_split_sum(
+        truth, split = ggx_integral_and_split_sum(
             radiance.astype(np.float64), n, v, args.alpha, level_alphas(int(chain))
         )
         print(
