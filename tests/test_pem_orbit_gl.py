@@ -103,6 +103,15 @@ def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(g
         origins=shell.origins,
         ellipsoids=shell.ellipsoids,
     )
+    # a cell whose lower views are under the floor (they see no reflector): the blend keeps
+    # the upper two, their weights scaled to sum to 1
+    session.camera.elevation = 3.0  # between the rows at -12 and 18 degrees
+    session.render_offscreen(method, (R, R))
+    rows = {v // count: store.sees_reflector(v) for v in method.last_blend.views}
+    upper = int(np.searchsorted(store.space["elevations"], 3.0))
+    assert rows == {upper: True} and np.isclose(sum(method.last_blend.weights), 1.0)
+    assert not any(store.sees_reflector(v) for v in store.done() if v // count == upper - 1)
+    session.camera.elevation = 27.0
     method.values["coverage"] = "file"
     method.show(bake, session.gpu_scene, Path("grid.pem"))
     session.render_offscreen(method, (R, R))
