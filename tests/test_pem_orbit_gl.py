@@ -59,7 +59,7 @@ def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(g
     scene = load_scene("room")
     session = RenderSession(scene, ctx=gl_ctx, cube_size=32)
     method = session.method("pem")
-    method.orbit_store = lambda source, step: OrbitStore(source, None, STEP, parameters=TINY)
+    method.orbit_store = lambda source, *_: OrbitStore(source, None, STEP, parameters=TINY)
     method.values.update({"kd": 0.0, "fresnel_layer": False})
     session.renderer.display["background"] = False
     session.camera.azimuth, session.camera.elevation = 25.0 + 12.0, 18.0 + 9.0  # in a cell

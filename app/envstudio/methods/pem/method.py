@@ -35,7 +35,7 @@ from envstudio.core.cubemap import faces_to_cross
 from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.pem.bake.orbit import ORBIT_STEP, OrbitStore
+from envstudio.methods.pem.bake.orbit import ORBIT_BAKE, ORBIT_STEP, OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
@@ -116,6 +116,15 @@ class PemMethod(Method):
             choices=("20", "10", "5"),
         ),
         Parameter(
+            "orbit_em_size",
+            "choice",
+            f"{ORBIT_BAKE['em_size']}",
+            help="Cube face edge of the full orbit's maps (each size its own cache; "
+            "docs/pem/orbit.md: 128 fits the teapot's self-reflections at grazing views, at "
+            "four times the disk and the bake time).",
+            choices=("64", "128"),
+        ),
+        Parameter(
             "em_model",
             "choice",
             "layered",
@@ -157,10 +166,11 @@ class PemMethod(Method):
     )
 
     @staticmethod
-    def orbit_store(source: str, step: float) -> OrbitStore:
-        """The full orbit of a scene file, ``step`` degrees apart on both axes (its views
-        baked with the GL lookups)."""
-        return OrbitStore(source, GlLookups, (step, step))
+    def orbit_store(source: str, step: float, em_size: int) -> OrbitStore:
+        """The full orbit of a scene file, ``step`` degrees apart on both axes, with
+        ``em_size``² maps (its views baked with the GL lookups)."""
+        parameters = {**ORBIT_BAKE, "em_size": int(em_size)}
+        return OrbitStore(source, GlLookups, (step, step), parameters=parameters)
 
     def __init__(self, ctx: moderngl.Context, programs):
         super().__init__(ctx, programs)
@@ -247,14 +257,19 @@ class PemMethod(Method):
             meshes were replaced since (the orbit bakes the scene file's).
         """
         meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        key = ("orbit", scene.scene.source, id(scene), meshes, str(self.values["orbit_step"]))
+        chosen = (str(self.values["orbit_step"]), str(self.values["orbit_em_size"]))
+        key = ("orbit", scene.scene.source, id(scene), meshes, chosen)
         if self._loaded is not None and self._loaded.key == key:
             return
         name = scene.scene.name
         if not scene.scene.source:
             raise InputFileError(f"scene {name}: not read from a scene file, so no orbit to bake")
         try:
-            store = self.orbit_store(scene.scene.source, float(self.values["orbit_step"]))
+            store = self.orbit_store(
+                scene.scene.source,
+                float(self.values["orbit_step"]),
+                int(self.values["orbit_em_size"]),
+            )
         except ValueError as exc:
             raise InputFileError(f"{scene.scene.source}: {exc}") from None
         if store.plan.scene.environment.checksum() != scene.scene.environment.checksum():
