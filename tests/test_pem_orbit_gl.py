@@ -143,3 +143,29 @@ def test_a_background_bake_stopped_midway_keeps_whole_views_and_resumes(cache):
     assert again._order and not set(again._order) & done  # only the views still missing
     again.stop()
     assert first.stat().st_mtime_ns == stamp
+
+
+def test_an_orbit_under_a_replaced_environment_is_refused_and_auto_plays_the_file(gl_ctx, cache):
+    """The orbit bakes the scene file's environment: replaced in place, orbit=... refuses in one
+    line (and again without rebuilding), auto falls back to the shipped arc bake."""
+    from envstudio.errors import InputFileError
+    from envstudio.io.images import read_image
+    from envstudio.resources import asset_root
+    from envstudio.scene.environment import Environment
+
+    session = RenderSession(load_scene("room"), ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.orbit_store = lambda source, *_: OrbitStore(source, None, STEP, parameters=TINY)
+    method.prepare(session.gpu_scene)
+    assert method.orbit is not None
+    night = asset_root() / "hdr" / "night.exr"
+    session.gpu_scene.set_environment(Environment(read_image(night)[::8, ::8], night))
+    method.values["coverage"] = "orbit"
+    for _ in range(2):
+        with pytest.raises(InputFileError, match="environment was replaced") as info:
+            method.prepare(session.gpu_scene)
+        assert "\n" not in str(info.value)
+    method.values["coverage"] = "auto"
+    method.prepare(session.gpu_scene)
+    assert method.orbit is None and method.bake.views == 6  # the shipped arc
+    session.release()

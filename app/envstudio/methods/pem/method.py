@@ -184,6 +184,7 @@ class PemMethod(Method):
         self._shown_pem = ""  # the ``pem`` value of what is on show (a failed load returns to it)
         self.last_blend: ViewBlend | None = None
         self._drawn_static = False  # a full orbit's views about the camera were not there
+        self._orbit_refused: tuple[tuple, str] | None = None  # (its key, why): not retried
 
     # -- loading ---------------------------------------------------------------------
 
@@ -220,7 +221,8 @@ class PemMethod(Method):
             try:
                 self._prepare_orbit(scene)
                 return
-            except InputFileError:
+            except InputFileError as exc:
+                self._orbit_refused = (self._orbit_key(scene), str(exc))
                 if self.values["coverage"] == "orbit":
                     raise
         if not named and not path.exists():
@@ -247,6 +249,14 @@ class PemMethod(Method):
             )
         return coverage == "orbit"
 
+    def _orbit_key(self, scene: GpuScene) -> tuple:
+        """What a loaded orbit is valid for: the scene file, the scene, its environment and
+        meshes (either may be replaced in place), the grid."""
+        meshes = tuple(id(node.mesh) for node in scene.reflectors())
+        chosen = (str(self.values["orbit_step"]), str(self.values["orbit_em_size"]))
+        where = (scene.scene.source, id(scene), id(scene.scene.environment))
+        return ("orbit", *where, meshes, chosen)
+
     def _prepare_orbit(self, scene: GpuScene) -> None:
         """Load the scene's full orbit (its geometry; views come as they are needed).
 
@@ -256,11 +266,11 @@ class PemMethod(Method):
             A scene not read from a file, without a reflector, or whose environment or
             meshes were replaced since (the orbit bakes the scene file's).
         """
-        meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        chosen = (str(self.values["orbit_step"]), str(self.values["orbit_em_size"]))
-        key = ("orbit", scene.scene.source, id(scene), meshes, chosen)
+        key = self._orbit_key(scene)
         if self._loaded is not None and self._loaded.key == key:
             return
+        if self._orbit_refused is not None and self._orbit_refused[0] == key:
+            raise InputFileError(self._orbit_refused[1])  # said before: not built again
         name = scene.scene.name
         if not scene.scene.source:
             raise InputFileError(f"scene {name}: not read from a scene file, so no orbit to bake")
