@@ -161,3 +161,25 @@ def room_tracer():
 
     scene = load_scene("room")
     return SceneTracer(scene), scene
+
+
+def test_halved_view_keeps_the_layers_composing(room_tracer):
+    """A coarser footprint (models.py): the 2 × 2 means, with α·L and (1 − α)·D exact."""
+    tracer, scene = room_tracer
+    view = tracer.trace(scene.camera, size=48, samples=2)
+    half = view.halved()
+    assert half.size == 24 and half.samples == 4 * view.samples
+
+    def box(a):
+        return 0.25 * (a[:, 0::2, 0::2] + a[:, 1::2, 0::2] + a[:, 0::2, 1::2] + a[:, 1::2, 1::2])
+
+    a = view.local_alpha[..., None].astype(np.float64)
+    assert (half.local_alpha > 0).any() and (half.local_alpha < 1).any()
+    np.testing.assert_allclose(half.incident(), box(view.incident()), atol=1e-5)
+    np.testing.assert_allclose(half.local_alpha, box(view.local_alpha), atol=1e-6)
+    np.testing.assert_allclose(
+        half.local_alpha[..., None] * half.local_rgb, box(a * view.local_rgb), atol=1e-5
+    )
+    np.testing.assert_allclose(half.coverage, box(view.coverage), atol=1e-6)
+    np.testing.assert_allclose(half.composite, box(view.composite[None])[0], atol=1e-6)
+    assert view.halved().halved().size == 12

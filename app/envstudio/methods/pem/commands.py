@@ -104,6 +104,23 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         "three times faster with the same playback to 0.08 dB, docs/pem/paper.md)",
     )
     parser.add_argument(
+        "--over-passes",
+        type=int,
+        default=0,
+        metavar="K",
+        help="refit the layered model's distant and local colour through its composite K "
+        "times after seed 003's sequential fit (not in the paper; docs/pem/orbit.md); "
+        "default 0",
+    )
+    parser.add_argument(
+        "--footprints",
+        type=int,
+        default=1,
+        metavar="F",
+        help="fit every level to the view at R, R/2, ..., R/2^(F-1) too, so that a smaller "
+        "playback reads fitted levels (not in the paper; docs/pem/orbit.md); default 1",
+    )
+    parser.add_argument(
         "--no-ptm",
         dest="ptm",
         action="store_false",
@@ -151,6 +168,8 @@ def _check(args: argparse.Namespace) -> None:
     rtol = getattr(args, "rtol", None)
     if rtol is not None and not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise ParameterError(f"--rtol {rtol:g}: expected a relative residual in (0, 1)")
+    if not 0 <= getattr(args, "over_passes", 0) <= 20:
+        raise ParameterError(f"--over-passes {args.over_passes}: expected 0 to 20")
     if getattr(args, "elevations", 1) < 1:
         raise ParameterError(f"--elevations {args.elevations}: expected a row count ≥ 1")
     if args.views < 1:
@@ -159,6 +178,11 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--step {args.step:g}: expected a positive number of degrees")
     if not 8 <= args.size <= 4096:
         raise ParameterError(f"--size {args.size}: expected a trace resolution in [8, 4096]")
+    footprints = getattr(args, "footprints", 1)
+    if not (1 <= footprints and args.size >> (footprints - 1) >= 8):
+        raise ParameterError(
+            f"--footprints {footprints}: expected 1 or more, with --size / 2^(F-1) ≥ 8"
+        )
     if not 1 <= args.samples <= 1024:
         raise ParameterError(f"--samples {args.samples}: expected rays per pixel in [1, 1024]")
     if not 2 <= args.em_size <= 1024:
@@ -269,6 +293,8 @@ def run_bake_pem(args: argparse.Namespace) -> int:
                 coupling=getattr(args, "coupling", 0.0),
                 coupling_passes=getattr(args, "coupling_passes", 2),
                 rtol=getattr(args, "rtol", None),
+                over_passes=getattr(args, "over_passes", 0),
+                footprints=getattr(args, "footprints", 1),
                 phong_exponent=getattr(args, "phong_exponent", None),
             )
         except ValueError as exc:  # a scene without a reflector, a scheduler that is silent

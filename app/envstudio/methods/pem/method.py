@@ -125,6 +125,17 @@ class PemMethod(Method):
             choices=("64", "128"),
         ),
         Parameter(
+            "orbit_fit",
+            "choice",
+            "refit",
+            help="How the full orbit's layered maps are fitted (each its own cache): seed003, "
+            "the paper's sequence (distant layer to its segment, then the local RGBA through "
+            "the over); refit, then the distant and local colour refitted through the "
+            "composite (not in the paper; docs/pem/orbit.md: the layered PEM then leads the "
+            "sphere at grazing views).",
+            choices=("refit", "seed003"),
+        ),
+        Parameter(
             "em_model",
             "choice",
             "layered",
@@ -166,10 +177,13 @@ class PemMethod(Method):
     )
 
     @staticmethod
-    def orbit_store(source: str, step: float, em_size: int) -> OrbitStore:
+    def orbit_store(source: str, step: float, em_size: int, fit: str = "refit") -> OrbitStore:
         """The full orbit of a scene file, ``step`` degrees apart on both axes, with
-        ``em_size``² maps (its views baked with the GL lookups)."""
+        ``em_size``² maps (its views baked with the GL lookups), its layered maps fitted by
+        ``fit`` (``refit`` or ``seed003``: no refit through the composite)."""
         parameters = {**ORBIT_BAKE, "em_size": int(em_size)}
+        if fit == "seed003":
+            parameters["over_passes"] = 0
         return OrbitStore(source, GlLookups, (step, step), parameters=parameters)
 
     def __init__(self, ctx: moderngl.Context, programs):
@@ -253,7 +267,7 @@ class PemMethod(Method):
         """What a loaded orbit is valid for: the scene file, the scene, its environment and
         meshes (either may be replaced in place), the grid."""
         meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        chosen = (str(self.values["orbit_step"]), str(self.values["orbit_em_size"]))
+        chosen = tuple(str(self.values[k]) for k in ("orbit_step", "orbit_em_size", "orbit_fit"))
         where = (scene.scene.source, id(scene), id(scene.scene.environment))
         return ("orbit", *where, meshes, chosen)
 
@@ -279,6 +293,7 @@ class PemMethod(Method):
                 scene.scene.source,
                 float(self.values["orbit_step"]),
                 int(self.values["orbit_em_size"]),
+                str(self.values["orbit_fit"]),
             )
         except ValueError as exc:
             raise InputFileError(f"{scene.scene.source}: {exc}") from None

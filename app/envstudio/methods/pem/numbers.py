@@ -21,7 +21,8 @@ Not tests (this machine is shared and noisy): a command that prints JSON::
   them: when it grows with K, the workers are competing for cores.
 - :func:`wobble_numbers`: seed 003 §6's wobble of a bake (methods/pem/offmanifold.py
   ``wobble``: mean |Δ| per frame of the displayed reflector along a 0.25° sweep),
-  per EM model (the PTM's too where the bake has it) and for the ray trace.
+  per EM model (the PTM's too where the bake has it) and for the ray trace, and its
+  largest |Δ| per frame (the PTM's "pops" where the sweep crosses a sample view).
 - :func:`coupling_sweep` (issue 31, coupled inference, not in seed 003): for each
   weight γ, a small bake of the shipped arc (6 views, 2° apart), its on-manifold
   predicted playback PSNR, its wobble, and the speckle of its coarse levels
@@ -133,7 +134,12 @@ def scaling(
 
 
 def wobble_numbers(path: str | Path, above: float = 0.0, size: int = 128) -> dict[str, float]:
-    """:func:`~envstudio.methods.pem.offmanifold.wobble` of the bake at ``path`` (its scene)."""
+    """The wobble of the bake at ``path`` (its scene), and its pops.
+
+    Per model and ``trace``, the mean (:func:`~envstudio.methods.pem.offmanifold.wobble`)
+    and, as ``"<model> max"``, the largest frame-to-frame change of the sweep
+    (:func:`~envstudio.methods.pem.offmanifold.wobble_sweep`): seed 003 §6's pops of the PTM.
+    """
     from envstudio.engine.session import RenderSession
     from envstudio.methods.pem import offmanifold
     from envstudio.methods.pem.bake.pem_file import load_pem
@@ -144,10 +150,12 @@ def wobble_numbers(path: str | Path, above: float = 0.0, size: int = 128) -> dic
         method = session.method("pem")
         method.values["pem"] = str(path)
         method.prepare(session.gpu_scene)
-        out = offmanifold.wobble(session, method, size=size, elevation_above=above)
+        changes = offmanifold.wobble_sweep(session, method, size=size, elevation_above=above)
     finally:
         session.release()
-    return {k: round(v, 5) for k, v in out.items()}
+    out = {name: round(float(np.mean(c)), 5) for name, c in changes.items()}
+    out.update({f"{name} max": round(float(np.max(c)), 5) for name, c in changes.items()})
+    return out
 
 
 def speckle(levels: list[np.ndarray], first: int = 1) -> list[float]:
@@ -182,13 +190,16 @@ def coupling_sweep(
     step: float = 2.0,
     tie: float = 1e-3,
     passes: int = 2,
+    footprints: int = 1,
+    over_passes: int = 0,
 ) -> list[dict]:
     """Per coupling weight γ: on-manifold PSNR, wobble and coarse-level speckle (module docstring).
 
     Each bake is the shipped arc (``views`` views ``step``° apart from the scene camera)
     at a small size, without the PTM; the wobble sweep is played at the bake's size.
     The decimated row is the speckle of the box-decimated finest level of the γ = 0 bake
-    (what a filtered chain would show).
+    (what a filtered chain would show). ``footprints`` and ``over_passes`` are the bake's
+    (run_bake; not in seed 003).
     """
     from envstudio.methods.pem.bake.mip import decimated_chain
 
@@ -200,6 +211,7 @@ def coupling_sweep(
             report = run_bake(
                 "room", lambda c: arc_views(c, views, step), path, size=size, em_size=em_size,
                 tie=tie, ptm=False, coupling=weight, coupling_passes=passes,
+                footprints=footprints, over_passes=over_passes,
             )  # fmt: skip
             seconds = time.perf_counter() - start
             bake = report.bake
@@ -207,6 +219,8 @@ def coupling_sweep(
             row = {
                 "coupling": weight,
                 "tie": tie,
+                "footprints": footprints,
+                "over_passes": over_passes,
                 "bake_s": round(seconds, 1),
                 **{f"psnr_{n}": round(float(np.mean(bake.playback_psnr[n])), 2)
                    for n in ("layered", "sphere")},
@@ -239,6 +253,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--coupling", metavar="G,G,...", help="coupling weights to sweep")
     parser.add_argument("--tie", type=float, default=1e-3, help="coupling sweep: μ")
     parser.add_argument("--passes", type=int, default=2, help="coupling sweep: coupled passes")
+    parser.add_argument("--footprints", type=int, default=1, help="coupling sweep: footprints")
+    parser.add_argument("--over-passes", type=int, default=0, help="coupling sweep: refits")
     args = parser.parse_args(argv)
     if args.wobble:
         rows = wobble_numbers(args.wobble, args.above, args.size or 128)
@@ -246,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
         weights = tuple(float(w) for w in args.coupling.split(","))
         rows = coupling_sweep(
             weights, args.size or 128, args.em_size or 32, args.views or 6, 2.0, args.tie,
-            args.passes,
+            args.passes, args.footprints, args.over_passes,
         )  # fmt: skip
     elif args.scaling:
         rows = scaling(

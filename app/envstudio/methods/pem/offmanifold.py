@@ -37,6 +37,7 @@ __all__ = [
     "measure",
     "offmanifold_views",
     "wobble",
+    "wobble_sweep",
 ]
 
 #: Heights above the arc of seed 003 Figure 7's off-manifold views, degrees.
@@ -194,7 +195,7 @@ def measure(
     return results
 
 
-def wobble(
+def wobble_sweep(
     session,
     method,
     frames: int = 24,
@@ -202,8 +203,8 @@ def wobble(
     size: int = 128,
     samples: int = 16,
     elevation_above: float = 0.0,
-) -> dict[str, float]:
-    """Seed 003 §6's "wobble": mean |frame-to-frame change| over a slow sweep, per model.
+) -> dict[str, np.ndarray]:
+    """The frame-to-frame changes of a slow sweep, per model (seed 003 §6's wobble and pops).
 
     Parameters
     ----------
@@ -222,9 +223,10 @@ def wobble(
     Returns
     -------
     dict
-        Per model and ``trace``: the mean over consecutive frame pairs of the
-        mean absolute difference of the displayed images (0–1) over the pixels
-        both frames' traces cover fully.
+        Per model and ``trace``: (frames − 1,) the mean absolute difference of
+        consecutive displayed images (0–1) over the pixels both frames' traces cover
+        fully. Its mean is the wobble (:func:`wobble`); a "pop" (seed 003 §6 on PTMs)
+        is one large change where the sweep crosses a sample view, its maximum.
     """
     bake = method.bake
     space = bake.view_space
@@ -246,14 +248,24 @@ def wobble(
         for model in models:
             shown = to_ldr(_render(session, method, camera, size, model), exposure, tonemap)
             images[model].append(shown / 255.0)
-    out = {}
-    for name, seq in images.items():
-        changes = [
-            np.abs(b - a)[m0 & m1].mean()
-            for a, b, m0, m1 in zip(seq, seq[1:], masks, masks[1:], strict=False)
-        ]
-        out[name] = float(np.mean(changes))
-    return out
+    return {
+        name: np.array(
+            [
+                np.abs(b - a)[m0 & m1].mean()
+                for a, b, m0, m1 in zip(seq, seq[1:], masks, masks[1:], strict=False)
+            ]
+        )
+        for name, seq in images.items()
+    }
+
+
+def wobble(session, method, **kw) -> dict[str, float]:
+    """Seed 003 §6's "wobble": mean |frame-to-frame change| over a slow sweep, per model.
+
+    Keywords as :func:`wobble_sweep`; returns per model and ``trace`` the mean of its
+    changes.
+    """
+    return {name: float(np.mean(c)) for name, c in wobble_sweep(session, method, **kw).items()}
 
 
 def figure_image(results: list[ViewResult], path) -> None:

@@ -3,7 +3,8 @@
 Not tests (measurements on a shared machine; docs/pem/orbit.md has the results)::
 
     python -m envstudio.methods.pem.orbit_numbers --spacing 40,20,10,5 [--cameras 4]
-    python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24] [--em-size 64]
+    python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24] [--em-size 64] \
+        [--fit refit|seed003]
 
 - :func:`spacing_sweep`: at random cameras (elevations 15°–60°, so that the
   coarsest grid's views stay above the floor), for each spacing s a 2 × 2 grid bake
@@ -144,8 +145,11 @@ def orbit_quality(
     size: int = 160,
     workers: int | None = None,
     em_size: int = ORBIT_BAKE["em_size"],
+    fit: str = "refit",
 ) -> dict:
     """Layered, sphere and static EM of the full orbit at random cameras (module docstring).
+
+    ``fit`` is pem's ``orbit_fit`` (``refit`` or ``seed003``).
 
     Returns
     -------
@@ -158,7 +162,7 @@ def orbit_quality(
     session = RenderSession(load_scene(scene), cube_size=128)
     try:
         method = session.method("pem")
-        method.values.update({"coverage": "orbit", "orbit_em_size": str(em_size)})
+        method.values.update({"coverage": "orbit", "orbit_em_size": str(em_size), "orbit_fit": fit})
         method.prepare(session.gpu_scene)
         store = method.orbit
         space, target = store.space, np.asarray(store.space["target"])
@@ -203,12 +207,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--size", type=int, default=160)
     parser.add_argument("--workers", type=int)
     parser.add_argument("--em-size", type=int, default=ORBIT_BAKE["em_size"], help="--orbit")
+    parser.add_argument("--fit", choices=("refit", "seed003"), default="refit", help="--orbit")
     args = parser.parse_args(argv)
     if args.spacing:
         steps = tuple(float(s) for s in args.spacing.split(","))
         out = spacing_sweep(args.scene, steps, args.cameras or 4, args.size, args.workers)
     else:
-        out = orbit_quality(args.scene, args.cameras or 24, args.size, args.workers, args.em_size)
+        out = orbit_quality(
+            args.scene, args.cameras or 24, args.size, args.workers, args.em_size, args.fit
+        )
     print(json.dumps(out, indent=1))
     return 0
 

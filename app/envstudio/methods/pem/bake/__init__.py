@@ -8,7 +8,8 @@ playback reproduces them. views samples the parameter space; trace does the
 tracing (Embree through embreex, no GL); lookups computes the playback's
 per-pixel EM lookups and the trilinear rendering matrix; mip the MIP chains;
 infer the EM geometries and the solve of all MIP levels at once (§4, "EM
-Inference", "EM MIPMAPs"); hull the convex-hull split of the reflectors'
+Inference", "EM MIPMAPs"); over the layered model refitted through its
+composite (not in seed 003); hull the convex-hull split of the reflectors'
 triangles; models the per-view models (layered distant + local RGBA, sphere at
 infinity, static EM) and their predicted playback; pem_file the ``.pem`` file
 (version 2: zstd half floats, levels as residuals); bake the resumable job of

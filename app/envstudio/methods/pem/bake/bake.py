@@ -180,6 +180,14 @@ class ViewTask:
         (:data:`SOLVE_RTOL` as bakes before the option; docs/pem/paper.md measures
         10⁻⁴: two to three times faster, the same playback to 0.08 dB; 10⁻³ loses up to
         1.6 dB between views).
+    over_passes : int
+        K ≥ 1: the layered model's distant and local colour refitted through its
+        composite K times after seed 003's sequential fit (:mod:`.over`; not in seed
+        003); 0: the paper's fit, as bakes before the option.
+    footprints : int
+        F ≥ 1: the view's rows at R, R/2, …, R/2^(F−1) in every solve (the trace
+        box-filtered, its lookups at each size; models.py, not in seed 003); 1: the
+        bake's own pixels alone, as bakes before the option.
     """
 
     scene: str
@@ -204,6 +212,8 @@ class ViewTask:
     anchors: dict | None = None
     phong_exponent: float = 0.0
     rtol: float = 1e-6
+    over_passes: int = 0
+    footprints: int = 1
 
     def camera(self) -> OrbitCamera:
         """The view's camera."""
@@ -312,6 +322,10 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
     )
     start = time.perf_counter()
     lookups = _view_lookups(ctx, task, camera)
+    coarser: list = []
+    for _ in range(task.footprints - 1):
+        smaller = (coarser[-1][0] if coarser else view).halved()
+        coarser.append((smaller, _view_lookups(ctx, replace(task, size=smaller.size), camera)))
     coupled = {}
     if task.coupling and task.anchors is not None:
         coupled = {"anchors": task.anchors, "coupling": task.coupling}
@@ -325,6 +339,8 @@ def bake_view(task: ViewTask) -> dict[str, np.ndarray]:
         lod_bias=task.lod_bias,
         models=tuple(task.models),
         rtol=task.rtol,
+        over_passes=task.over_passes,
+        coarser=tuple(coarser),
         **coupled,
     )
     if n not in ctx["static"]:
@@ -405,6 +421,10 @@ def _part_header(key: str, task: ViewTask) -> dict:
         del task_fields["phong_exponent"]
     if task.rtol == SOLVE_RTOL:  # the solve of before the option
         del task_fields["rtol"]
+    if not task.over_passes:  # seed 003's sequential layered fit, as before the option
+        del task_fields["over_passes"]
+    if task.footprints == 1:  # the bake's own pixels alone, as before the option
+        del task_fields["footprints"]
     return {"key": key, "task": task_fields}
 
 
@@ -513,7 +533,7 @@ class BakePlan:
 def plan_bake(
     scene, views, size=256, samples=4, em_size=64, smoothness=1e-3, seed=0, tie=None,
     lod_bias=LOD_BIAS, lookups="auto", gl_lookups=None, ptm=True, coupling=0.0, coupling_passes=2,
-    probe=True, phong_exponent=None, rtol=None,
+    probe=True, phong_exponent=None, rtol=None, over_passes=0, footprints=1,
 ) -> BakePlan:  # fmt: skip
     """The tasks, parameters and key of a bake (:func:`run_bake`'s arguments; no work done).
 
@@ -524,7 +544,10 @@ def plan_bake(
     ``phong_exponent`` N > 0 samples the reflectors' Phong lobe in the trace
     (module docstring); None or 0: mirrors, and the parameters and key of before.
     ``rtol`` is the MIP solves' CG tolerance (:class:`ViewTask`); None:
-    :data:`SOLVE_RTOL`, and the parameters and key of before.
+    :data:`SOLVE_RTOL`, and the parameters and key of before. ``over_passes`` K ≥ 1
+    refits the layered model through its composite and ``footprints`` F > 1 adds the
+    view's coarser footprints to the solves (:class:`ViewTask`); 0 and 1: the
+    parameters and key of before.
 
     Raises
     ------
@@ -550,6 +573,14 @@ def plan_bake(
     rtol = SOLVE_RTOL if rtol is None else float(rtol)
     if not (np.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise ValueError(f"rtol {rtol:g}: expected a relative residual in (0, 1)")
+    over_passes = int(over_passes)
+    if over_passes < 0:
+        raise ValueError(f"over passes {over_passes}: expected 0 (seed 003's fit) or more")
+    footprints = int(footprints)
+    if not 1 <= footprints or int(size) >> (footprints - 1) < 8:
+        raise ValueError(
+            f"footprints {footprints}: expected 1 or more, with R / 2^(F − 1) ≥ 8 (R = {size})"
+        )
     models = MODELS if ptm else REQUIRED
     parameters = {
         "size": int(size),
@@ -574,6 +605,10 @@ def plan_bake(
         parameters["phong_exponent"] = exponent
     if rtol != SOLVE_RTOL:  # absent: the solve of before
         parameters["rtol"] = rtol
+    if over_passes:  # not in seed 003 (bake/over.py); absent: the sequential fit of before
+        parameters["over_passes"] = over_passes
+    if footprints > 1:  # not in seed 003 (bake/models.py); absent: R's pixels alone
+        parameters["footprints"] = footprints
     key = _bake_key(scene_path, scene_obj, {**parameters, "view_space": space.describe()})
     tasks = [
         ViewTask(
@@ -597,6 +632,8 @@ def plan_bake(
             coupling,
             phong_exponent=exponent,
             rtol=rtol,
+            over_passes=over_passes,
+            footprints=footprints,
         )
         for i, c in enumerate(space.cameras())
     ]
@@ -630,6 +667,8 @@ def run_bake(
     probe: bool = True,
     phong_exponent: float | None = None,
     rtol: float | None = None,
+    over_passes: int = 0,
+    footprints: int = 1,
 ) -> BakeReport:
     """Bake every view of ``views`` to ``output`` (a ``.pem``), resuming from its parts folder.
 
@@ -698,6 +737,11 @@ def run_bake(
         parameters, parts and file of a bake made before the option.
     rtol
         The MIP solves' CG tolerance (:class:`ViewTask`); None: :data:`SOLVE_RTOL`.
+    over_passes
+        The layered model's refits through its composite (:class:`ViewTask`, :mod:`.over`);
+        0: seed 003's sequential fit.
+    footprints
+        The view's footprints in every solve (:class:`ViewTask`); 1: its own pixels.
 
     Returns
     -------
@@ -707,7 +751,8 @@ def run_bake(
     output = check_output_path(output)
     plan = plan_bake(
         scene, views, size, samples, em_size, smoothness, seed, tie, lod_bias, lookups,
-        gl_lookups, ptm, coupling, coupling_passes, probe, phong_exponent, rtol,
+        gl_lookups, ptm, coupling, coupling_passes, probe, phong_exponent, rtol, over_passes,
+        footprints,
     )  # fmt: skip
     scene_obj, space, parameters, key, tasks = (
         plan.scene,

@@ -20,6 +20,19 @@ model       C   b (the traced layer)                                 range
                 PTM (Figure 7, issue 31)
 =========== === ==================================================== ============
 
+With ``over_passes`` K ≥ 1 (not in seed 003) the layered model's distant and
+local colour are then refitted through their composite K times
+(:mod:`~envstudio.methods.pem.bake.over`), which the paper's sequential fit (distant
+to D, then the local RGBA through the over) leaves short at grazing views.
+
+Coarser footprints (``coarser``, not in seed 003): seed 003 fits every level to
+the lookups of the bake's own R × R image, whose footprints reach the coarse
+levels only where the reflection is minified, so a playback at a smaller size
+(which reads coarser levels everywhere) reads levels the solve barely
+constrained (the speckle of Figure 5). With coarser footprints the same view,
+box-filtered to R/2 (R/4, …), joins every solve with its own lookups at that
+size: its rows ask the coarser levels for what a smaller image shows.
+
 The static EM (Figure 1c, :func:`static_em`) is not inferred: it is a cube map
 of the scene traced from the reflectors' centre with the reflectors hidden,
 its levels the box-decimated chain, looked up like the sphere model.
@@ -43,11 +56,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from scipy import sparse
 
 from envstudio.core.cubemap import texel_directions
 from envstudio.methods.pem.bake.infer import MipInference, infer_local_over, infer_mip, psnr
 from envstudio.methods.pem.bake.lookups import CHANNELS, LOD_BIAS, MODELS, PLAYBACK, PixelLookups
 from envstudio.methods.pem.bake.mip import decimated_chain, mip_sizes
+from envstudio.methods.pem.bake.over import refit_over
 from envstudio.methods.pem.bake.trace import TracedView
 
 __all__ = [
@@ -132,6 +147,8 @@ def infer_view_models(
     anchors: dict[str, list[np.ndarray | None]] | None = None,
     coupling: float = 0.0,
     models: tuple[str, ...] = MODELS,
+    over_passes: int = 0,
+    coarser: tuple[tuple[TracedView, PixelLookups], ...] = (),
     **kw,
 ) -> ViewModels:
     """Infer every model's MIP chain for every part of one view (module docstring).
@@ -166,6 +183,17 @@ def infer_view_models(
     models
         The maps to infer: :data:`MODELS` (the three of seed 003 and the PTM's), or
         without ``ptm``.
+    over_passes
+        K ≥ 1: after seed 003's sequential fit, the distant and local colour are
+        refitted through the layered composite K times
+        (:func:`~envstudio.methods.pem.bake.over.refit_over`; not in seed 003; needs
+        ``local_fit="over"``); 0: the paper's fit alone.
+    coarser
+        Coarser footprints of the same view (not in seed 003): pairs of the view
+        halved (:meth:`~envstudio.methods.pem.bake.trace.TracedView.halved`, once per
+        entry) and its lookups at that size, whose rows join every solve, so that the
+        coarse levels a smaller playback reads are fitted too (module docstring). ():
+        the view's own pixels alone, as seed 003.
 
     Returns
     -------
@@ -173,9 +201,18 @@ def infer_view_models(
     """
     if local_fit not in ("over", "premultiplied"):
         raise ValueError(f"local_fit {local_fit!r}: expected 'over' or 'premultiplied'")
+    if over_passes and local_fit != "over":
+        raise ValueError("over passes refit through the over: they need local_fit 'over'")
     start = time.perf_counter()
-    on_hull = hull_pixels(lookups, hull)
+    footprints = [(view, lookups), *coarser]
+    hulls = [hull_pixels(lk, hull) for _, lk in footprints]
+    on_hull = np.concatenate([h.ravel() for h in hulls])
     out = ViewModels(fits={m: [] for m in models})
+
+    def rows(model: str, p: int) -> sparse.csr_matrix:
+        """The lookups of every footprint, stacked: (Σ R_i², Σ 6 n_k²)."""
+        blocks = [lk.matrix(model, p, levels, em_size, lod_bias) for _, lk in footprints]
+        return blocks[0] if len(blocks) == 1 else sparse.vstack(blocks, format="csr")
 
     def coupled(model: str, p: int) -> dict:
         """The coupling keywords of one solve ({} when uncoupled: today's solve)."""
@@ -186,29 +223,32 @@ def infer_view_models(
         return {"anchor": mean, "coupling": coupling * count}
 
     for p in range(len(view.part_names)):
-        pixels = fit_pixels(view, lookups, p)
-        if not pixels.any():
+        if not fit_pixels(view, lookups, p).any():
             for model in models:
                 out.fits[model].append(None)
             continue
-        targets = _targets(view, p, on_hull)
+        pixels = np.concatenate([fit_pixels(v, lk, p).ravel() for v, lk in footprints])
+        each = [_targets(v, p, h) for (v, _), h in zip(footprints, hulls, strict=True)]
+        targets = {
+            name: np.concatenate([t[name].reshape(-1, t[name].shape[-1]) for t in each])
+            for name in each[0]
+        }
 
         def solve(model, target, hi=np.inf, p=p, pixels=pixels):
-            A = lookups.matrix(model, p, levels, em_size, lod_bias)
+            A = rows(model, p)
             return infer_mip(
                 A, pixels, target, em_size, levels, smoothness, tie, 0.0, hi,
                 **kw, **coupled(model, p),
             )  # fmt: skip
 
         distant = solve("distant", targets["distant"])
-        out.fits["distant"].append(distant)
         if local_fit == "over":
             i_d = distant.render()
             incident = targets["sphere"].reshape(-1, 3).copy()
             hull_rows = on_hull.ravel()
             incident[hull_rows] = i_d[hull_rows]  # the playback shows I_D there
             local = infer_local_over(
-                lookups.matrix("local", p, levels, em_size, lod_bias),
+                rows("local", p),
                 pixels,
                 incident,
                 i_d,
@@ -220,8 +260,15 @@ def infer_view_models(
                 **kw,
                 **coupled("local", p),
             )
+            if over_passes:
+                anchors_p = {m: tuple(coupled(m, p).values()) for m in ("distant", "local")}
+                distant, local = refit_over(
+                    distant, local, targets["sphere"], on_hull, em_size, over_passes,
+                    levels, smoothness, tie, {m: a for m, a in anchors_p.items() if a}, **kw,
+                )  # fmt: skip
         else:
             local = solve("local", targets["local"], [np.inf] * 3 + [1.0])
+        out.fits["distant"].append(distant)
         out.fits["local"].append(local)
         out.fits["sphere"].append(solve("sphere", targets["sphere"]))
         if "ptm" in models:  # the surface texture shows the whole incident layer
@@ -284,15 +331,15 @@ def predict(
         if fd is None:
             continue
         fl, fs = models.fits["local"][p], models.fits["sphere"][p]
-        i_d = fd.render()
-        loc = fl.render()
+        i_d = fd.render()[:npix]  # the view's own rows (coarser footprints follow)
+        loc = fl.render()[:npix]
         layered = loc[:, :3] + (1.0 - loc[:, 3:]) * i_d
         layered[on_hull] = i_d[on_hull]
-        incident = {"layered": layered, "sphere": fs.render()}
+        incident = {"layered": layered, "sphere": fs.render()[:npix]}
         if chain is not None:
-            incident["static"] = fs.matrix @ chain
+            incident["static"] = fs.matrix[:npix] @ chain
         if "ptm" in models.fits:
-            incident["ptm"] = models.fits["ptm"][p].render()
+            incident["ptm"] = models.fits["ptm"][p].render()[:npix]
         cov = view.coverage[p].reshape(npix, 1).astype(np.float64)
         f = view.fresnel[p].reshape(npix, 1).astype(np.float64)
         diffuse = (1.0 - f) * view.diffuse[p].reshape(npix, 3)

@@ -16,6 +16,7 @@ from their files (methods/pem/resident.py).
 from __future__ import annotations
 
 import os
+import shutil
 from dataclasses import replace
 from pathlib import Path
 
@@ -37,7 +38,15 @@ from envstudio.methods.pem.bake.pem_file import PemBake, load_pem, save_pem
 from envstudio.methods.pem.bake.views import orbit_views
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["ORBIT_BAKE", "ORBIT_STEP", "OrbitStore", "nearest_first", "orbit_cache_dir"]
+__all__ = [
+    "ORBIT_BAKE",
+    "ORBIT_CACHE_GB",
+    "ORBIT_STEP",
+    "OrbitStore",
+    "nearest_first",
+    "orbit_cache_dir",
+    "prune_orbits",
+]
 
 #: (azimuth, elevation) spacing of the orbit's views in degrees, chosen by measurement:
 #: the coarsest whose playback midway between samples is within 1 dB of the 2× denser
@@ -45,15 +54,27 @@ __all__ = ["ORBIT_BAKE", "ORBIT_STEP", "OrbitStore", "nearest_first", "orbit_cac
 ORBIT_STEP = (5.0, 5.0)
 
 #: The orbit's bake parameters: those of the shipped arc bake (assets/pem/room.pem), the
-#: three maps of seed 003 (no PTM: Figure 7's comparison is made on the arc), and the solve's
-#: tolerance 10⁻⁴: twice as fast as the default 10⁻⁶ at 64² EMs, and the same playback to
-#: 0.08 dB at 24 random cameras (10⁻³, faster still, lost up to 1.6 dB near the floor;
-#: docs/pem/orbit.md).
-ORBIT_BAKE = {"size": 256, "samples": 4, "em_size": 64, "ptm": False, "rtol": 1e-4}
+#: three maps of seed 003 (no PTM: Figure 7's comparison is made on the arc), the solve's
+#: tolerance 10⁻⁴ (twice as fast as the default 10⁻⁶ at 64² EMs, and the same playback to
+#: 0.08 dB at 24 random cameras; 10⁻³, faster still, lost up to 1.6 dB near the floor), and
+#: the layered maps refitted through their composite twice (bake/over.py, not in seed 003:
+#: without it the sphere at infinity leads at grazing views; docs/pem/orbit.md).
+ORBIT_BAKE = {
+    "size": 256,
+    "samples": 4,
+    "em_size": 64,
+    "ptm": False,
+    "rtol": 1e-4,
+    "over_passes": 2,
+}
 
 
 #: zstd level of a view's file: fast (level 19, the bake file's, takes seconds a view).
 VIEW_ZSTD_LEVEL = 3
+
+#: Default cap of the orbits' cache, GB (``$ENVSTUDIO_ORBIT_CACHE_GB`` overrides): a whole
+#: 5° orbit of ``room`` is about 1.3 GB of views above the floor (docs/pem/orbit.md).
+ORBIT_CACHE_GB = 4.0
 
 
 def orbit_cache_dir() -> Path:
@@ -62,6 +83,65 @@ def orbit_cache_dir() -> Path:
 
     base = os.environ.get("ENVSTUDIO_CACHE_DIR") or platformdirs.user_cache_dir("envstudio")
     return Path(base) / "pem"
+
+
+def _last_used(folder: Path) -> float:
+    """When an orbit folder was last opened or written (itself, or its views folder)."""
+    times = [p.stat().st_mtime for p in (folder, folder / "views") if p.exists()]
+    return max(times, default=0.0)
+
+
+def _folder_bytes(folder: Path) -> int:
+    return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+
+
+def prune_orbits(root: Path, keep: Path, cap_bytes: float) -> list[Path]:
+    """Delete the least recently used orbit folders under ``root`` while they exceed the cap.
+
+    Parameters
+    ----------
+    root
+        The orbits' cache folder (:func:`orbit_cache_dir`).
+    keep
+        The orbit in use, never deleted (it alone may exceed the cap: its views are
+        what the user is looking at).
+    cap_bytes
+        The cap on all ``orbit-*`` folders together, bytes.
+
+    Returns
+    -------
+    list of Path
+        The folders deleted, oldest first.
+    """
+    others = [p for p in Path(root).glob("orbit-*") if p.is_dir() and p != Path(keep)]
+    sizes = {p: _folder_bytes(p) for p in others}
+    total = sum(sizes.values()) + (_folder_bytes(Path(keep)) if Path(keep).exists() else 0)
+    deleted = []
+    for folder in sorted(others, key=_last_used):
+        if total <= cap_bytes:
+            break
+        shutil.rmtree(folder, ignore_errors=True)
+        total -= sizes[folder]
+        deleted.append(folder)
+    return deleted
+
+
+def orbit_cache_cap() -> float:
+    """The orbits' cache cap in bytes: ``$ENVSTUDIO_ORBIT_CACHE_GB`` or :data:`ORBIT_CACHE_GB`.
+
+    Raises
+    ------
+    InputFileError
+        The variable is not a positive number.
+    """
+    text = os.environ.get("ENVSTUDIO_ORBIT_CACHE_GB", "")
+    try:
+        gigabytes = float(text) if text else ORBIT_CACHE_GB
+    except ValueError:
+        gigabytes = float("nan")
+    if not (np.isfinite(gigabytes) and gigabytes > 0):
+        raise InputFileError(f"ENVSTUDIO_ORBIT_CACHE_GB={text!r}: expected a size in GB > 0")
+    return gigabytes * 1e9
 
 
 def nearest_first(space: dict, camera: OrbitCamera, views: list[int] | None = None) -> list[int]:
@@ -148,6 +228,7 @@ class OrbitStore:
         self.parts = parts_folder(self.output)
         self._shell: PemBake | None = None
         self._seen: dict[int, bool] = {}  # view → whether it saw a reflector (once baked)
+        self._pruned = False  # the other orbits checked against the cache's cap
 
     # -- what is baked -----------------------------------------------------------------------
 
@@ -236,8 +317,16 @@ class OrbitStore:
             the default bakes in one child process).
         bar
             A tqdm bar over the views.
+
+        The first call of a store marks its orbit as used and deletes the least recently
+        used other orbits beyond the cache's cap (:func:`prune_orbits`,
+        :func:`orbit_cache_cap`).
         """
         self.folder.mkdir(parents=True, exist_ok=True)
+        if not self._pruned:
+            os.utime(self.folder)
+            prune_orbits(self.folder.parent, self.folder, orbit_cache_cap())
+            self._pruned = True
         for view in self._resume_parts():  # baked, then interrupted before it was kept
             task = self.plan.tasks[view]
             part = load_part(self.parts / part_name(task), self.plan.key, task)

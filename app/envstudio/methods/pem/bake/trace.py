@@ -215,6 +215,57 @@ class TracedView:
         a = self.local_alpha[..., None].astype(np.float64)
         return a * self.local_rgb + (1.0 - a) * self.distant
 
+    def halved(self) -> TracedView:
+        """The view at R // 2: each pixel the 2 × 2 box of this one's (an odd edge drops its last).
+
+        Means are taken so that the layers still compose exactly: α_L and coverage are
+        the means; L is the mean of α_L·L over the mean α_L; D is the mean of
+        (1 − α_L)·D over 1 − mean α_L (the plain mean where nothing is local). So
+        :meth:`incident` is the mean of the four incident values, and the premultiplied
+        α_L·L and the distant layer that shows through are the four pixels' means. The
+        per-sample ray arrays are dropped. Used by the bake's coarser footprints
+        (methods/pem/bake/models.py).
+
+        Raises
+        ------
+        ValueError
+            An image of fewer than 2 × 2 pixels.
+        """
+        half = self.size // 2
+        if half < 1:
+            raise ValueError(f"cannot halve a {self.size}² view")
+
+        def box(a, first=1):
+            """2 × 2 means over axes ``first`` and ``first`` + 1 (the image's rows, columns)."""
+            a = np.moveaxis(np.asarray(a, np.float64), (first, first + 1), (0, 1))
+            a = a[: 2 * half, : 2 * half]
+            a = 0.25 * (a[0::2, 0::2] + a[1::2, 0::2] + a[0::2, 1::2] + a[1::2, 1::2])
+            return np.moveaxis(a, (0, 1), (first, first + 1))
+
+        alpha = self.local_alpha.astype(np.float64)
+        a_mean = box(alpha)
+        local = box(alpha[..., None] * self.local_rgb)
+        shown = box((1.0 - alpha[..., None]) * self.distant)
+        open_part = (1.0 - a_mean)[..., None]
+        distant = np.where(open_part > 1e-6, shown / np.maximum(open_part, 1e-6), box(self.distant))
+        rgb = np.where(a_mean[..., None] > 0, local / np.maximum(a_mean[..., None], 1e-12), 0.0)
+        f32 = np.float32
+        return TracedView(
+            camera=self.camera,
+            size=half,
+            samples=4 * self.samples,
+            part_names=list(self.part_names),
+            composite=box(self.composite, 0).astype(f32),
+            background=box(self.background, 0).astype(f32),
+            coverage=box(self.coverage).astype(f32),
+            diffuse=box(self.diffuse).astype(f32),
+            fresnel=box(self.fresnel).astype(f32),
+            distant=distant.astype(f32),
+            local_rgb=rgb.astype(f32),
+            local_alpha=a_mean.astype(f32),
+            phong_exponent=self.phong_exponent,
+        )
+
     def diffuse_term(self) -> npt.NDArray[np.float64]:
         """(P, R, R, 3) the paper's additive diffuse layer, (1 − F)·d."""
         return (1.0 - self.fresnel[..., None].astype(np.float64)) * self.diffuse
