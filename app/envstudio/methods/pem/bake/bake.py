@@ -57,7 +57,7 @@ from envstudio.io.atomic import atomic_path, check_output_path
 from envstudio.io.cluster import dask_client
 from envstudio.io.scene_file import load_scene, resolve_scene
 from envstudio.methods.pem.bake.hull import mesh_check, reflector_hulls
-from envstudio.methods.pem.bake.infer import distant_box, local_ellipsoid
+from envstudio.methods.pem.bake.infer import MULTIGRID_SIZE, distant_box, local_ellipsoid
 from envstudio.methods.pem.bake.lookups import (
     LOD_BIAS,
     MODELS,
@@ -421,6 +421,8 @@ def _part_header(key: str, task: ViewTask) -> dict:
         del task_fields["phong_exponent"]
     if task.rtol == SOLVE_RTOL:  # the solve of before the option
         del task_fields["rtol"]
+    if task.em_size >= MULTIGRID_SIZE:  # infer.py's multigrid CG: not the bits of before
+        task_fields["solver"] = "multigrid"
     if not task.over_passes:  # seed 003's sequential layered fit, as before the option
         del task_fields["over_passes"]
     if task.footprints == 1:  # the bake's own pixels alone, as before the option

@@ -50,7 +50,11 @@ All MIP levels at once (§4, "EM MIPMAPs")
 levels x, D the seam-crossing smoothness of each level (block diagonal) and T
 :func:`mip_ties` (each coarse texel against the 2 × 2 mean of the level below,
 weak, so levels nothing looks up are defined), with range bounds kept by an
-active set (:func:`bounded_cg`). :func:`infer_mip` wraps it for one layer;
+active set (:func:`bounded_cg`). From 128² EMs (:data:`MULTIGRID_SIZE`) its CG is
+preconditioned by a multigrid V-cycle (:class:`ChainMultigrid`, not in seed 003)
+instead of Jacobi: the regulariser is a Laplacian, whose fill of the texels no
+pixel reaches takes Jacobi-CG O(n) iterations (600–1500 at 256², about 100 with
+the cycle; docs/pem/paper.md). :func:`infer_mip` wraps it for one layer;
 :func:`infer_local_over` fits the local layer's premultiplied RGBA through the
 "over" with the inferred distant layer.
 
@@ -78,6 +82,7 @@ from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
+from scipy import linalg as sla
 from scipy import sparse
 from scipy.sparse import linalg as splinalg
 from threadpoolctl import threadpool_limits
@@ -88,7 +93,9 @@ from envstudio.methods.pem.bake.trace import SceneTracer, TracedView
 from envstudio.scene.graph import Scene
 
 __all__ = [
+    "MULTIGRID_SIZE",
     "BoxGeometry",
+    "ChainMultigrid",
     "EMInference",
     "EllipsoidGeometry",
     "MipInference",
@@ -724,6 +731,98 @@ def mip_regulariser(size: int, levels: int, smoothness: float, tie: float) -> sp
     return (smoothness * (D.T @ D) + tie * (T.T @ T)).tocsr()
 
 
+#: The finest face edge from which :func:`solve_mip` preconditions with :class:`ChainMultigrid`
+#: (docs/pem/paper.md: at 64² its cycle costs more than the iterations it saves); below it,
+#: Jacobi, the bits of before.
+MULTIGRID_SIZE = 128
+
+
+def _aggregation(sizes: list[int]) -> tuple[sparse.csr_matrix, list[int]]:
+    """The 2 × 2 aggregation of every level of a chain, and the coarse chain's face edges.
+
+    Texel (f, i, j) of a level of edge n > 1 joins aggregate (f, ⌊i/2⌋, ⌊j/2⌋) of edge
+    ⌈n/2⌉; a level of edge 1 is kept. Same layout as :func:`mip_ties` (levels
+    concatenated, faces of n² texels row by row).
+
+    Returns
+    -------
+    P : (Σ_k 6 n_k², Σ_k 6 m_k²) scipy.sparse.csr_matrix
+        Ones: the coarse chain prolonged piecewise constant.
+    coarse : list of int
+        The m_k.
+    """
+    cols, coarse, start = [], [], 0
+    for n in sizes:
+        m = (n + 1) // 2
+        f, i, j = (
+            a.ravel() for a in np.meshgrid(np.arange(6), np.arange(n), np.arange(n), indexing="ij")
+        )
+        cols.append(start + f * m * m + (i // 2) * m + j // 2)
+        coarse.append(m)
+        start += 6 * m * m
+    cols = np.concatenate(cols)
+    P = sparse.csr_matrix(
+        (np.ones(len(cols)), cols, np.arange(len(cols) + 1)), shape=(len(cols), start)
+    )
+    return P, coarse
+
+
+class ChainMultigrid:
+    """A multigrid preconditioner for a MIP chain's normal matrix (not in seed 003).
+
+    The regulariser λ DᵀD + μ TᵀT of :func:`solve_mip` is a Laplacian over 6 n² texels,
+    so Jacobi-preconditioned CG needs O(n) iterations to fill the texels nothing looks
+    up (measured: 600–1500 at n = 256, rtol 10⁻⁶). This is one symmetric V(1,1)
+    cycle over :func:`_aggregation`'s hierarchy: operators M_{l+1} = P_lᵀ M_l P_l
+    (Galerkin), smoothing x ← x + S_l (r − M_l x) with S_l = ω diag(Σ_j |M_l,ij|)⁻¹
+    (ℓ1 Jacobi) once before and once after the coarse correction, and the coarsest
+    chain (≤ ``coarsest`` texels, or every level of edge 1) solved exactly (dense
+    Cholesky). ω < 2 keeps the cycle symmetric positive definite, as CG needs:
+    2 S⁻¹ − M = (2/ω − 1) diag(Σ_j |M_ij|) + (diag(Σ_j |M_ij|) − M), a positive diagonal
+    plus a diagonally dominant matrix. An aggregation hierarchy, not the chain's own
+    levels: those are unknowns of the one solve, not coarse versions of each other.
+
+    Parameters
+    ----------
+    M
+        (N, N) the symmetric positive definite normal matrix, N = Σ_k 6 n_k².
+    sizes
+        The chain's face edges n_k (:func:`~envstudio.methods.pem.bake.mip.mip_sizes`).
+    weight
+        ω of the smoothing.
+    coarsest
+        Unknowns below which the hierarchy stops.
+    """
+
+    def __init__(
+        self, M: sparse.spmatrix, sizes: list[int], weight: float = 1.5, coarsest: int = 600
+    ):
+        M = sparse.csr_matrix(M)
+        self.operators, self.smoothers, self.prolongations = [], [], []
+        while True:
+            self.operators.append(M)
+            self.smoothers.append(weight / np.asarray(abs(M).sum(axis=1)).ravel())
+            if M.shape[0] <= coarsest or max(sizes) == 1:
+                break
+            P, sizes = _aggregation(sizes)
+            self.prolongations.append(P)
+            M = (P.T @ M @ P).tocsr()
+        self.coarse = sla.cho_factor(M.toarray())
+
+    def __call__(self, r: np.ndarray) -> np.ndarray:
+        """(N,) B r, B ≈ M⁻¹ symmetric positive definite: one V-cycle from zero."""
+        return self._cycle(np.asarray(r, dtype=np.float64), 0)
+
+    def _cycle(self, r: np.ndarray, level: int) -> np.ndarray:
+        if level == len(self.prolongations):
+            return sla.cho_solve(self.coarse, r)
+        M, s, P = self.operators[level], self.smoothers[level], self.prolongations[level]
+        x = s * r
+        x += P @ self._cycle(P.T @ (r - M @ x), level + 1)
+        x += s * (r - M @ x)
+        return x
+
+
 def bounded_cg(
     M: sparse.csr_matrix,
     rhs: npt.ArrayLike,
@@ -733,15 +832,24 @@ def bounded_cg(
     rtol: float = 1e-6,
     maxiter: int = 3000,
     active_rounds: int = 2,
+    preconditioner: ChainMultigrid | None = None,
 ) -> tuple[np.ndarray, int]:
     """Solve M x = rhs (M symmetric positive semi-definite) with lo ≤ x ≤ hi by an active set.
 
-    Jacobi-preconditioned CG; the entries a solve puts out of range are fixed at
-    the bound and the others re-solved, warm started, at most ``active_rounds``
+    Preconditioned CG; the entries a solve puts out of range are fixed at the
+    bound and the others re-solved, warm started, at most ``active_rounds``
     times; the result is clipped. ``lo`` and ``hi`` are scalars or per entry.
+    Each round stops at ||r|| ≤ rtol ||b|| of its free system (scipy's rule).
     BLAS runs on one thread meanwhile: CG's many short dot products are ten
     times slower when BLAS threads contend for loaded cores (measured here:
     30 s against 3 s for one 256² view).
+
+    Parameters
+    ----------
+    preconditioner
+        B ≈ M⁻¹ on (N,) vectors, symmetric positive definite (:class:`ChainMultigrid`);
+        a round with entries fixed uses B restricted to its free entries. None:
+        Jacobi, diag(M)⁻¹.
 
     Returns
     -------
@@ -752,8 +860,10 @@ def bounded_cg(
     n = M.shape[0]
     lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), n)
     hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), n)
-    diag = M.diagonal()
-    inv = np.where(diag > 0, 1.0 / np.where(diag > 0, diag, 1.0), 1.0)
+    if preconditioner is None:
+        diag = M.diagonal()
+        inv = np.where(diag > 0, 1.0 / np.where(diag > 0, diag, 1.0), 1.0)
+        preconditioner = inv.__mul__
     x = np.clip(np.asarray(x0, dtype=np.float64), lo, hi)
     rhs = np.asarray(rhs, dtype=np.float64)
     fixed = np.zeros(n, bool)
@@ -764,19 +874,29 @@ def bounded_cg(
 
     with threadpool_limits(1):  # CG's dot products: BLAS threads only contend here
         for _ in range(active_rounds + 1):
-            x, fixed, done = _bounded_round(M, rhs, x, fixed, inv, lo, hi, rtol, maxiter, tick)
+            x, fixed, done = _bounded_round(
+                M, rhs, x, fixed, preconditioner, lo, hi, rtol, maxiter, tick
+            )
             if done:
                 break
     return x, count[0]
 
 
-def _bounded_round(M, rhs, x, fixed, inv, lo, hi, rtol, maxiter, tick):
+def _bounded_round(M, rhs, x, fixed, preconditioner, lo, hi, rtol, maxiter, tick):
     """One active-set round of :func:`bounded_cg`: (x, fixed, nothing left out of range)."""
     free = np.flatnonzero(~fixed)
     rows = M[free]
     Mf = rows[:, free]
     rf = rhs[free] - rows[:, np.flatnonzero(fixed)] @ x[fixed]
-    pre = splinalg.LinearOperator(Mf.shape, matvec=lambda v, d=inv[free]: d * v, dtype=np.float64)
+
+    def restricted(v):  # B on the free entries: S B Sᵀ, still symmetric positive definite
+        if len(free) == len(x):
+            return preconditioner(v)
+        full = np.zeros(len(x))
+        full[free] = v
+        return preconditioner(full)[free]
+
+    pre = splinalg.LinearOperator(Mf.shape, matvec=restricted, dtype=np.float64)
     sol, info = splinalg.cg(
         Mf, rf, x0=x[free], rtol=rtol, atol=0.0, maxiter=maxiter, M=pre, callback=tick
     )
@@ -867,9 +987,15 @@ def solve_mip(
     lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), b.shape[1])
     hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), b.shape[1])
     iterations = []
+    multigrid = None  # Jacobi below MULTIGRID_SIZE, where the cycle costs more than it saves
+    if size >= MULTIGRID_SIZE:
+        with threadpool_limits(1):  # one hierarchy for every channel and round
+            multigrid = ChainMultigrid(M, sizes)
     for c in range(b.shape[1]):
         start = np.full(M.shape[0], float(np.clip(b[:, c].mean(), lo[c], hi[c])))
-        x[:, c], count = bounded_cg(M, rhs[:, c], start, lo[c], hi[c], rtol, maxiter, active_rounds)
+        x[:, c], count = bounded_cg(
+            M, rhs[:, c], start, lo[c], hi[c], rtol, maxiter, active_rounds, multigrid
+        )
         iterations.append(count)
     out = [x[offsets[k] : offsets[k + 1]].reshape(6, n, n, -1) for k, n in enumerate(sizes)]
     return out, iterations
