@@ -53,7 +53,7 @@ weak, so levels nothing looks up are defined), with range bounds kept by an
 active set (:func:`bounded_cg`). From 128² EMs (:data:`MULTIGRID_SIZE`) its CG is
 preconditioned by a multigrid V-cycle (:class:`ChainMultigrid`, not in seed 003)
 instead of Jacobi: the regulariser is a Laplacian, whose fill of the texels no
-pixel reaches takes Jacobi-CG O(n) iterations (600–1500 at 256², about 100 with
+pixel reaches takes Jacobi-CG O(n) iterations (600–1500 at 256², 30–160 with
 the cycle; docs/pem/paper.md). :func:`infer_mip` wraps it for one layer;
 :func:`infer_local_over` fits the local layer's premultiplied RGBA through the
 "over" with the inferred distant layer.
