@@ -203,6 +203,38 @@ def test_hull_masks():
     assert mesh_check(moved)["sha256"] != check["sha256"]
 
 
+def _hull_mask_brute_force(v, f, hull_points, tol=1e-5, cos_tol=0.999):
+    """Every triangle against every facet (what hull_mask's normal search must equal)."""
+    from scipy.spatial import ConvexHull
+
+    planes = np.unique(np.round(ConvexHull(hull_points).equations, 9), axis=0)
+    scale = float(np.linalg.norm(np.ptp(hull_points, axis=0)))
+    c = v[f]
+    normal = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    unit = normal / np.where(length > 0, length, 1.0)[:, None]
+    dist = np.einsum("kcx,fx->kcf", c, planes[:, :3]) + planes[:, 3]
+    on_plane = np.all(np.abs(dist) <= tol * scale, axis=1)
+    parallel = np.abs(unit @ planes[:, :3].T) >= cos_tol
+    degenerate = (length <= 1e-10 * scale * scale)[:, None]
+    return np.any(on_plane & (parallel | degenerate), axis=1)
+
+
+def test_hull_mask_equals_every_triangle_against_every_facet():
+    from envstudio.io.scene_file import load_scene
+
+    teapot, lid = load_scene("room").reflectors()
+    meshes = [node_world_mesh(n) for n in (teapot, lid)]
+    points = np.concatenate([m[0] for m in meshes]).astype(np.float64)
+    for v, f in meshes:
+        v = v.astype(np.float64)
+        f = np.concatenate([f, [[f[0, 0], f[0, 0], f[0, 1]]]])  # and a degenerate one
+        for faces in (f, f[:, ::-1]):  # either winding
+            fast = hull_mask(v, faces, hull_points=points)
+            assert fast.tolist() == _hull_mask_brute_force(v, faces, points).tolist()
+            assert 0 < fast.sum() < len(faces)
+
+
 def test_levels_as_residuals_round_trip():
     rng = np.random.default_rng(0)
     finest = rng.random((2, 6, 8, 8, 3)).astype(np.float32)

@@ -6,6 +6,7 @@ Not tests (this machine is shared and noisy): a command that prints JSON::
     python -m envstudio.methods.pem.numbers --scaling [--views 24] [--size 64] [--em-size 16]
     python -m envstudio.methods.pem.numbers --wobble FILE.pem [--above 10]
     python -m envstudio.methods.pem.numbers --coupling 0,0.1,1 [--tie 1e-3] [--size 128] ...
+    python -m envstudio.methods.pem.numbers --footprint-sweep 1:0,2:0,1:2,2:2
 
 - :func:`view_numbers`: for views of the default arc, each traced and inferred
   in this process (:func:`~envstudio.methods.pem.bake.bake.bake_view`, the bake's work
@@ -27,6 +28,9 @@ Not tests (this machine is shared and noisy): a command that prints JSON::
   weight γ, a small bake of the shipped arc (6 views, 2° apart), its on-manifold
   predicted playback PSNR, its wobble, and the speckle of its coarse levels
   (:func:`speckle`).
+- :func:`footprint_sweep` (issue 31, not in seed 003): bakes of the shipped arc
+  with coarser footprints and refits through the over, played at their sample
+  views smaller than baked, where the coarse levels show.
 """
 
 from __future__ import annotations
@@ -48,7 +52,15 @@ from envstudio.methods.pem.bake.views import arc_views
 from envstudio.methods.pem.commands import run_bake
 from envstudio.methods.pem.lookups_gl import GlLookups
 
-__all__ = ["coupling_sweep", "main", "scaling", "speckle", "view_numbers", "wobble_numbers"]
+__all__ = [
+    "coupling_sweep",
+    "footprint_sweep",
+    "main",
+    "scaling",
+    "speckle",
+    "view_numbers",
+    "wobble_numbers",
+]
 
 
 def view_numbers(
@@ -239,6 +251,59 @@ def coupling_sweep(
     return out
 
 
+def footprint_sweep(
+    variants: tuple[tuple[int, int], ...] = ((1, 0), (2, 0), (1, 2), (2, 2)),
+    played: tuple[int, ...] = (64, 128),
+    size: int = 128,
+    em_size: int = 32,
+) -> list[dict]:
+    """Playback at the sample views at smaller sizes than the bake's, per bake variant.
+
+    For each (footprints F, refit passes K) (bake/models.py and bake/over.py, not in
+    seed 003) a bake of the shipped arc (6 views 2° apart, R = ``size``, without the
+    PTM) is played at every sample view at each size of ``played`` and held against a
+    16-ray trace there (methods/pem/offmanifold.py ``measure``, displayed PSNR over the
+    fully covered reflector pixels): where a playback smaller than the bake reads
+    coarse levels, seed 003 Figure 5's speckle shows. Mean over the views.
+    """
+    from envstudio.engine.session import RenderSession
+    from envstudio.methods.pem import offmanifold
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for footprints, passes in variants:
+            path = Path(tmp) / f"f{footprints}k{passes}.pem"
+            start = time.perf_counter()
+            report = run_bake(
+                "room", lambda c: arc_views(c, 6, 2.0), path, size=size, em_size=em_size,
+                ptm=False, footprints=footprints, over_passes=passes,
+            )  # fmt: skip
+            row = {"footprints": footprints, "over_passes": passes}
+            row["bake_s"] = round(time.perf_counter() - start, 1)
+            session = RenderSession(load_scene("room"), cube_size=128)
+            try:
+                method = session.method("pem")
+                method.values.update({"pem": str(path), "coverage": "file"})
+                method.prepare(session.gpu_scene)
+                space = report.bake.view_space
+                views = [
+                    offmanifold.OffManifoldView(f"sample {a:g}", float(a), float(e))
+                    for a in space["azimuths"]
+                    for e in space["elevations"]
+                ]
+                for played_size in played:
+                    results = offmanifold.measure(session, method, views, size=played_size)
+                    for model in ("layered", "sphere", "static"):
+                        row[f"{model}_{played_size}"] = round(
+                            float(np.mean([r.metrics[model]["psnr"] for r in results])), 2
+                        )
+            finally:
+                session.release()
+            out.append(row)
+            print(json.dumps(row), flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print :func:`view_numbers` (or :func:`scaling` with ``--scaling``) as JSON."""
     parser = argparse.ArgumentParser(prog="python -m envstudio.methods.pem.numbers")
@@ -254,10 +319,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tie", type=float, default=1e-3, help="coupling sweep: μ")
     parser.add_argument("--passes", type=int, default=2, help="coupling sweep: coupled passes")
     parser.add_argument("--footprints", type=int, default=1, help="coupling sweep: footprints")
+    parser.add_argument(
+        "--footprint-sweep",
+        metavar="F:K,...",
+        help="bakes with F footprints and K refit passes, played smaller than baked",
+    )
     parser.add_argument("--over-passes", type=int, default=0, help="coupling sweep: refits")
     args = parser.parse_args(argv)
     if args.wobble:
         rows = wobble_numbers(args.wobble, args.above, args.size or 128)
+    elif args.footprint_sweep:
+        variants = tuple(
+            (int(f), int(k)) for f, k in (v.split(":") for v in args.footprint_sweep.split(","))
+        )
+        rows = footprint_sweep(variants, size=args.size or 128, em_size=args.em_size or 32)
     elif args.coupling:
         weights = tuple(float(w) for w in args.coupling.split(","))
         rows = coupling_sweep(

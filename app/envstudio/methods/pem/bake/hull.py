@@ -109,14 +109,35 @@ def hull_mask(
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     length = np.linalg.norm(normal, axis=1)
     unit = normal / np.where(length > 0, length, 1.0)[:, None]
-    for start in range(0, len(f), 2048):
-        c = corners[start : start + 2048]
-        # (k, 3, F) signed distances of each corner to each facet plane
-        dist = np.einsum("kcx,fx->kcf", c, planes[:, :3]) + planes[:, 3]
-        on_plane = np.all(np.abs(dist) <= tol * scale, axis=1)  # (k, F)
-        parallel = np.abs(unit[start : start + 2048] @ planes[:, :3].T) >= cos_tol
-        degenerate = (length[start : start + 2048] <= 1e-10 * scale * scale)[:, None]
-        out[start : start + 2048] = np.any(on_plane & (parallel | degenerate), axis=1)
+    degenerate = length <= 1e-10 * scale * scale
+
+    def on_facets(rows: np.ndarray, facets: np.ndarray) -> np.ndarray:
+        """Whether triangle rows[i]'s corners all lie within tol of facet facets[i]'s plane."""
+        plane = planes[facets]
+        dist = np.einsum("kcx,kx->kc", corners[rows], plane[:, :3]) + plane[:, 3:4]
+        return np.all(np.abs(dist) <= tol * scale, axis=1)
+
+    # A facet can hold a non-degenerate triangle only if its normal is within the angle
+    # of cos_tol of ± the triangle's: found by a KD-tree over the facets' unit normals
+    # (chord² = 2 − 2 cos), then tested exactly; m × F tests took 2 min for 63k triangles.
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(planes[:, :3])
+    chord = np.sqrt(max(2.0 - 2.0 * cos_tol, 0.0)) * (1.0 + 1e-6) + 1e-12
+    solid = np.flatnonzero(~degenerate)
+    for sign in (1.0, -1.0):
+        near = tree.query_ball_point(sign * unit[solid], chord)
+        counts = np.fromiter((len(n) for n in near), dtype=np.int64, count=len(near))
+        if not counts.any():
+            continue
+        rows = np.repeat(solid, counts)
+        facets = np.concatenate([np.asarray(n, dtype=np.int64) for n in near if n])
+        parallel = np.abs(np.einsum("kx,kx->k", unit[rows], planes[facets, :3])) >= cos_tol
+        hit = parallel & on_facets(rows, facets)
+        out[rows[hit]] = True
+    # degenerate triangles (no normal): on the hull if on any facet's plane
+    for row in np.flatnonzero(degenerate):
+        out[row] = on_facets(np.full(len(planes), row), np.arange(len(planes))).any()
     return out
 
 
