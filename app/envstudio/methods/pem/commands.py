@@ -100,8 +100,8 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--rtol",
         type=float,
-        help="the MIP solves' conjugate-gradient tolerance (default 1e-6; 1e-4 is two to "
-        "three times faster with the same playback to 0.08 dB, docs/pem/paper.md)",
+        help="the MIP solves' conjugate-gradient tolerance (default 1e-6; 1e-4 is about twice "
+        "as fast with the same playback to 0.08 dB, docs/pem/paper.md)",
     )
     parser.add_argument(
         "--over-passes",
