@@ -34,10 +34,17 @@ def dask_client(scheduler: str, timeout: float = SCHEDULER_TIMEOUT_S, workers: i
             "a Dask run needs dask and distributed: pip install 'envmap-studio[cluster]'"
         ) from None
     if scheduler == "local":
-        # worker processes start with spawn (distributed's default): no fork after EGL or Embree
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+        import dask
+
+        # worker processes start with spawn (distributed's default): no fork after EGL or Embree.
+        # Without distributed's MALLOC_TRIM_THRESHOLD_: setting it fixes glibc's mmap threshold,
+        # so every large temporary of a solve is mapped and unmapped afresh; the PEM bake's
+        # multigrid solve ran 2.7 times slower on the workers than on the pool with it
+        # (docs/pem/paper.md).
+        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+            )
         return Client(cluster), cluster
     try:
         return Client(scheduler, timeout=timeout), None
