@@ -145,8 +145,10 @@ def scaling(
     return out
 
 
-def wobble_numbers(path: str | Path, above: float = 0.0, size: int = 128) -> dict[str, float]:
-    """The wobble of the bake at ``path`` (its scene), and its pops.
+def wobble_numbers(
+    path: str | Path, above: float = 0.0, size: int = 128, scene: str | None = None
+) -> dict[str, float]:
+    """The wobble of the bake at ``path`` in ``scene`` (default the bake's), and its pops.
 
     Per model and ``trace``, the mean (:func:`~envstudio.methods.pem.offmanifold.wobble`)
     and, as ``"<model> max"``, the largest frame-to-frame change of the sweep
@@ -157,7 +159,7 @@ def wobble_numbers(path: str | Path, above: float = 0.0, size: int = 128) -> dic
     from envstudio.methods.pem.bake.pem_file import load_pem
 
     bake = load_pem(path)
-    session = RenderSession(load_scene(bake.scene), cube_size=128)
+    session = RenderSession(load_scene(scene or bake.scene), cube_size=128)
     try:
         method = session.method("pem")
         method.values["pem"] = str(path)
@@ -307,7 +309,9 @@ def footprint_sweep(
 def main(argv: list[str] | None = None) -> int:
     """Print :func:`view_numbers` (or :func:`scaling` with ``--scaling``) as JSON."""
     parser = argparse.ArgumentParser(prog="python -m envstudio.methods.pem.numbers")
-    parser.add_argument("--scene", default="room")
+    parser.add_argument(
+        "--scene", help="shipped scene or TOML file (default room; --wobble: the bake's)"
+    )
     parser.add_argument("--views", type=int)
     parser.add_argument("--size", type=int)
     parser.add_argument("--samples", type=int, default=4)
@@ -327,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--over-passes", type=int, default=0, help="coupling sweep: refits")
     args = parser.parse_args(argv)
     if args.wobble:
-        rows = wobble_numbers(args.wobble, args.above, args.size or 128)
+        rows = wobble_numbers(args.wobble, args.above, args.size or 128, args.scene)
     elif args.footprint_sweep:
         variants = tuple(
             (int(f), int(k)) for f, k in (v.split(":") for v in args.footprint_sweep.split(","))
@@ -341,11 +345,20 @@ def main(argv: list[str] | None = None) -> int:
         )  # fmt: skip
     elif args.scaling:
         rows = scaling(
-            args.scene, args.views or 24, args.size or 64, args.samples, args.em_size or 16
+            args.scene or "room",
+            args.views or 24,
+            args.size or 64,
+            args.samples,
+            args.em_size or 16,
         )
     else:
         rows = view_numbers(
-            args.scene, args.views or 3, 1.0, args.size or 256, args.samples, args.em_size or 64
+            args.scene or "room",
+            args.views or 3,
+            1.0,
+            args.size or 256,
+            args.samples,
+            args.em_size or 64,
         )
     print(json.dumps(rows, indent=1))
     return 0
