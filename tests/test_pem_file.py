@@ -291,3 +291,10 @@ def test_local_cluster_workers_keep_glibc_malloc_defaults():
     finally:
         client.close()
         cluster.close()
+
+
+def test_zstd_level_changes_the_file_not_the_maps(baked, tmp_path):
+    fast = tmp_path / "fast.pem"
+    run_bake("room", _arc(2), fast, zstd_level=1, **TINY)
+    assert fast.stat().st_size != baked[0].stat().st_size
+    _same_bake(load_pem(fast), load_pem(baked[0]))

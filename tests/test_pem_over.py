@@ -86,4 +86,6 @@ def test_zero_passes_keep_the_bake_of_before(tmp_path, capsys):
     assert all(t.over_passes == 2 for t in two.tasks)
     argv = ["bake", "pem", "--scene", "room", "-o", str(tmp_path / "x.pem"), "--over-passes", "-1"]
     assert_one_line_error(*run_cli(capsys, *argv), "--over-passes -1: expected 0 to 20")
+    argv[-2:] = ["--zstd-level", "0"]
+    assert_one_line_error(*run_cli(capsys, *argv), "--zstd-level 0: expected a level in [1, 22]")
     assert not (tmp_path / "x.pem").exists()
