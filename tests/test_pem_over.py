@@ -89,3 +89,25 @@ def test_zero_passes_keep_the_bake_of_before(tmp_path, capsys):
     argv[-2:] = ["--zstd-level", "0"]
     assert_one_line_error(*run_cli(capsys, *argv), "--zstd-level 0: expected a level in [1, 22]")
     assert not (tmp_path / "x.pem").exists()
+
+
+def test_refits_of_a_coupled_bake_are_drawn_to_the_neighbours_too(tmp_path):
+    """The refit's solves carry the coupling's anchors (bake/over.py ``anchors``)."""
+    import numpy as np
+
+    from envstudio.methods.pem.commands import run_bake
+
+    def arc(camera):
+        return arc_views(camera, 3, 2.0)
+
+    tiny = {"size": 32, "samples": 2, "em_size": 4, "workers": 0, "ptm": False}
+    tied = {"coupling": 1.0, "coupling_passes": 1}
+    both = run_bake("room", arc, tmp_path / "a.pem", over_passes=1, **tied, **tiny).bake
+    plain = run_bake("room", arc, tmp_path / "b.pem", over_passes=1, **tiny).bake
+    assert both.parameters["coupling"] == 1.0 and both.parameters["over_passes"] == 1
+    for model in ("distant", "local"):  # neighbours' maps closer than refitted alone
+        spread = [
+            np.mean([np.abs(np.diff(lv, axis=0)).mean() for lv in b.maps[model]])
+            for b in (both, plain)
+        ]
+        assert spread[0] < 0.7 * spread[1], (model, spread)
