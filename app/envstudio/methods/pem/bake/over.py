@@ -18,9 +18,11 @@ composite's own error by block coordinate descent, α held at its fit:
 2. x_rgb ← argmin ||A_L x_rgb − (I − (1 − α_L)·I_D)||² + R(x_rgb), I_D the new one,
 
 K times (R the chain's smoothness and ties, :func:`~.infer.solve_mip`; ranges
-RGB ≥ 0). Each step can only lower the fitted pixels' composite error (up to the
-solves' tolerance and the bounds), so the layered playback at the sample view is
-never worse than the paper's sequential fit. The distant layer then carries
+RGB ≥ 0). Each step minimises the composite's objective (its squared error over the
+fitted pixels plus R, and the coupling's term in a coupled bake) over one block, so
+the objective cannot rise from step to step (up to the solves' tolerance and the
+bounds); the error alone is not guaranteed to fall, but measured it did at every
+pass (tests/test_pem_over.py). The distant layer then carries
 what the local layer's texels cannot resolve, where α_L < 1; α stays the fit
 of the traced segmentation, so the layers keep their meaning between views.
 """
