@@ -39,6 +39,7 @@ from envstudio.engine.protocols import Session
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_entries import discard
+from envstudio.io.cache_folder import cache_folder
 from envstudio.measure.ground_truth import GroundTruth
 
 SAVE_INTERVAL_S = 60.0
@@ -47,10 +48,7 @@ DEFAULT_LIMIT_MB = 2048.0
 
 def cache_dir() -> Path:
     """The folder holding envstudio's caches (not created here)."""
-    if os.environ.get("ENVSTUDIO_CACHE_DIR"):
-        return Path(os.environ["ENVSTUDIO_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "envstudio"
+    return cache_folder()
 
 
 def _add(digest, *arrays) -> None:

@@ -28,7 +28,6 @@ to give back the energy of the further bounces (:func:`energy_compensation`).
 from __future__ import annotations
 
 import hashlib
-import os
 import sys
 from pathlib import Path
 
@@ -39,6 +38,7 @@ from envstudio.core import ggx
 from envstudio.errors import InputFileError, OutputFileError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_entries import discard
+from envstudio.io.cache_folder import cache_folder
 
 __all__ = [
     "SAMPLES",
@@ -171,11 +171,8 @@ def energy_compensation(f0: float, a: float, b: float) -> float:
 
 
 def cache_dir() -> Path:
-    """The table's cache folder: ``$ENVSTUDIO_CACHE_DIR/splitsum``, else the user cache."""
-    import platformdirs
-
-    base = os.environ.get("ENVSTUDIO_CACHE_DIR") or platformdirs.user_cache_dir("envstudio")
-    return Path(base) / "splitsum"
+    """The table's cache folder: ``splitsum`` in envstudio's (:func:`.cache_folder`)."""
+    return cache_folder("splitsum")
 
 
 def load_dfg_table(size: int = TABLE_SIZE, samples: int = SAMPLES) -> npt.NDArray[np.float32]:

@@ -24,6 +24,7 @@ import numpy as np
 
 from envstudio.errors import InputFileError
 from envstudio.io.atomic import atomic_path
+from envstudio.io.cache_folder import cache_folder
 from envstudio.methods.pem.bake.bake import (
     BakeReport,
     load_part,
@@ -78,11 +79,8 @@ ORBIT_CACHE_GB = 4.0
 
 
 def orbit_cache_dir() -> Path:
-    """``$ENVSTUDIO_CACHE_DIR/pem``, else the platform's user cache (as rsibr's bakes)."""
-    import platformdirs
-
-    base = os.environ.get("ENVSTUDIO_CACHE_DIR") or platformdirs.user_cache_dir("envstudio")
-    return Path(base) / "pem"
+    """``pem`` in envstudio's cache folder (:func:`~envstudio.io.cache_folder.cache_folder`)."""
+    return cache_folder("pem")
 
 
 def _last_used(folder: Path) -> float:

@@ -46,6 +46,7 @@ from envstudio.core.icosahedron import icosahedron, subdivide
 from envstudio.core.rsibr_warp import view_frame
 from envstudio.errors import InputFileError, ParameterError
 from envstudio.io.atomic import atomic_path
+from envstudio.io.cache_folder import cache_folder
 from envstudio.methods.rsibr.bake.brdfs import brdf
 from envstudio.methods.rsibr.bake.cpu import bake_view_cpu
 from envstudio.resources import shader_root
@@ -134,11 +135,8 @@ def environment_key(pixels: npt.ArrayLike) -> str:
 
 
 def cache_dir() -> Path:
-    """Bakes' cache folder: ``$ENVSTUDIO_CACHE_DIR/rsibr``, else the platform's user cache."""
-    import platformdirs
-
-    base = os.environ.get("ENVSTUDIO_CACHE_DIR") or platformdirs.user_cache_dir("envstudio")
-    return Path(base) / "rsibr"
+    """Bakes' cache folder: ``rsibr`` in envstudio's (:func:`.cache_folder`)."""
+    return cache_folder("rsibr")
 
 
 def cache_key(
