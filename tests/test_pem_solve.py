@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from envstudio.methods.pem.bake.bake import _part_header, plan_bake
+from envstudio.methods.pem.bake.bake import MULTIGRID_RTOL, SOLVE_RTOL, _part_header, plan_bake
 from envstudio.methods.pem.bake.infer import (
     MULTIGRID_SIZE,
     ChainMultigrid,
@@ -84,3 +84,6 @@ def test_parts_solved_with_the_multigrid_are_not_the_parts_of_before():
         parts[em_size] = _part_header(plan.key, plan.tasks[0])["task"]
     assert "solver" not in parts[MULTIGRID_SIZE // 2]
     assert parts[MULTIGRID_SIZE]["solver"] == "multigrid"
+    # its default tolerance is its own too (docs/pem/paper.md: 10⁻⁶'s playback to 0.015 dB)
+    assert "rtol" not in parts[MULTIGRID_SIZE // 2]
+    assert parts[MULTIGRID_SIZE]["rtol"] == MULTIGRID_RTOL > SOLVE_RTOL

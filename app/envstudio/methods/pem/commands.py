@@ -100,8 +100,9 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--rtol",
         type=float,
-        help="the MIP solves' conjugate-gradient tolerance (default 1e-6; 1e-4 is about twice "
-        "as fast with the same playback to 0.08 dB, docs/pem/paper.md)",
+        help="the MIP solves' conjugate-gradient tolerance (default 1e-6 below 128² EMs, 1e-4 "
+        "from 128², where the multigrid solves; 1e-4 is about twice as fast with the same "
+        "playback to 0.08 dB, docs/pem/paper.md)",
     )
     parser.add_argument(
         "--over-passes",

@@ -75,10 +75,13 @@ from envstudio.scene.camera import OrbitCamera
 
 __all__ = [
     "DASK_CONNECT_TIMEOUT",
+    "MULTIGRID_RTOL",
+    "SOLVE_RTOL",
     "BakePlan",
     "BakeReport",
     "ViewTask",
     "bake_view",
+    "default_rtol",
     "load_part",
     "neighbours",
     "part_keys",
@@ -90,6 +93,11 @@ __all__ = [
 
 #: The MIP solves' default CG tolerance (infer.py ``solve_mip``): bakes' of before the option.
 SOLVE_RTOL = 1e-6
+
+#: The default tolerance where the solve is the multigrid one (from ``MULTIGRID_SIZE``² EMs,
+#: whose parts were never those of before): at 256² EMs its playback is 10⁻⁶'s to 0.015 dB
+#: at the sample views and midway between them, in half the inference (docs/pem/paper.md).
+MULTIGRID_RTOL = 1e-4
 
 #: Seconds a ``--scheduler ADDRESS`` has to answer before the bake gives up.
 DASK_CONNECT_TIMEOUT = 10.0
@@ -177,7 +185,7 @@ class ViewTask:
         0: mirrors, as bakes before the option.
     rtol : float
         The conjugate gradient's relative residual in every MIP solve
-        (:data:`SOLVE_RTOL` as bakes before the option; docs/pem/paper.md measures
+        (default :func:`default_rtol`; docs/pem/paper.md measures
         10⁻⁴: at 64² EMs (Jacobi) twice as fast with the same playback to 0.08 dB at the
         orbit's cameras, at 256² (multigrid) 22 s against 46 s a view; 10⁻³ loses up to
         1.6 dB between views).
@@ -533,6 +541,12 @@ class BakePlan:
     coupling: float
 
 
+def default_rtol(em_size: int) -> float:
+    """The MIP solves' CG tolerance when none is given: :data:`MULTIGRID_RTOL` where the
+    multigrid solves (``em_size`` ≥ ``MULTIGRID_SIZE``), else :data:`SOLVE_RTOL`."""
+    return MULTIGRID_RTOL if em_size >= MULTIGRID_SIZE else SOLVE_RTOL
+
+
 def plan_bake(
     scene, views, size=256, samples=4, em_size=64, smoothness=1e-3, seed=0, tie=None,
     lod_bias=LOD_BIAS, lookups="auto", gl_lookups=None, ptm=True, coupling=0.0, coupling_passes=2,
@@ -547,7 +561,7 @@ def plan_bake(
     ``phong_exponent`` N > 0 samples the reflectors' Phong lobe in the trace
     (module docstring); None or 0: mirrors, and the parameters and key of before.
     ``rtol`` is the MIP solves' CG tolerance (:class:`ViewTask`); None:
-    :data:`SOLVE_RTOL`, and the parameters and key of before. ``over_passes`` K ≥ 1
+    :func:`default_rtol` (below 128² EMs the parameters and key of before). ``over_passes`` K ≥ 1
     refits the layered model through its composite and ``footprints`` F > 1 adds the
     view's coarser footprints to the solves (:class:`ViewTask`); 0 and 1: the
     parameters and key of before.
@@ -573,7 +587,7 @@ def plan_bake(
     exponent = float(phong_exponent or 0.0)
     if not (np.isfinite(exponent) and exponent >= 0.0):
         raise ValueError(f"phong exponent {exponent:g}: expected N > 0, or 0 for a mirror")
-    rtol = SOLVE_RTOL if rtol is None else float(rtol)
+    rtol = default_rtol(int(em_size)) if rtol is None else float(rtol)
     if not (np.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise ValueError(f"rtol {rtol:g}: expected a relative residual in (0, 1)")
     over_passes = int(over_passes)
@@ -740,7 +754,7 @@ def run_bake(
         seed 003, whose §7 leaves glossy surfaces open). None or 0: mirrors, the
         parameters, parts and file of a bake made before the option.
     rtol
-        The MIP solves' CG tolerance (:class:`ViewTask`); None: :data:`SOLVE_RTOL`.
+        The MIP solves' CG tolerance (:class:`ViewTask`); None: :func:`default_rtol`.
     over_passes
         The layered model's refits through its composite (:class:`ViewTask`, :mod:`.over`);
         0: seed 003's sequential fit.
