@@ -17,10 +17,12 @@ from envstudio.io.scene_file import load_scene
 from envstudio.methods.pem.atlas import flat_maps
 from envstudio.methods.pem.bake.orbit import OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.methods.pem.blending import ptm_blend
 from envstudio.methods.pem.orbit_job import OrbitBakeJob
 from envstudio.methods.pem.resident import ResidentViews
 
 TINY = {"size": 16, "samples": 1, "em_size": 8, "ptm": False}
+TINY_PTM = {**TINY, "ptm": True}
 STEP = (30.0, 30.0)
 R = 40
 
@@ -37,6 +39,38 @@ def _random_maps(shell, view):
         m: [rng.uniform(0.0, 1.0, level.shape[1:]).astype(np.float32) for level in levels]
         for m, levels in shell.maps.items()
     }
+
+
+def _grid_file(store, azimuths, elevations):
+    """The orbit's views at these azimuth and elevation indices as a grid bake file."""
+    shell, count = store.shell(), len(store.space["azimuths"])
+    views = [e * count + a for e in elevations for a in azimuths]
+    maps = [store.load(v) for v in views]
+    angles = [store.space["azimuths"][a] for a in azimuths]
+    grid = {
+        **store.space,
+        "azimuths": list(np.unwrap(angles, period=360.0)),
+        "elevations": [store.space["elevations"][e] for e in elevations],
+    }
+    del grid["closed"]
+    return PemBake(
+        scene="room",
+        view_space=grid,
+        parts=shell.parts,
+        parameters=shell.parameters,
+        maps={
+            m: [np.stack(level) for level in zip(*(v[m] for v in maps), strict=True)]
+            for m in maps[0]
+        },
+        hull=shell.hull,
+        mesh_checks=shell.mesh_checks,
+        psnr={},
+        playback_psnr={},
+        cameras=shell.cameras[views],
+        box=shell.box,
+        origins=shell.origins,
+        ellipsoids=shell.ellipsoids,
+    )
 
 
 def test_resident_slots_hold_exactly_the_views_asked_for_least_recent_out(gl_ctx, cache):
@@ -73,36 +107,12 @@ def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(g
     session.render_offscreen(method, (R, R))  # baked once: nothing is baked again
     assert {p: p.stat().st_mtime_ns for p in views_folder.iterdir()} == stamps
     # the same four views' maps as a 2 x 2 grid bake file, played the file's way
-    shell, count = store.shell(), len(store.space["azimuths"])
+    count = len(store.space["azimuths"])
     a0, e0 = 0, int(np.searchsorted(store.space["elevations"], 27.0)) - 1  # the cell's corner
     a1, e1 = a0 + 1, e0 + 1
     views = [e * count + a for e in (e0, e1) for a in (a0, a1)]
     assert set(views) == set(blend.views)
-    maps = [store.load(v) for v in views]
-    grid = {
-        **store.space,
-        "azimuths": [store.space["azimuths"][a] for a in (a0, a1)],
-        "elevations": [store.space["elevations"][e] for e in (e0, e1)],
-    }
-    del grid["closed"]
-    bake = PemBake(
-        scene="room",
-        view_space=grid,
-        parts=shell.parts,
-        parameters=shell.parameters,
-        maps={
-            m: [np.stack(level) for level in zip(*(v[m] for v in maps), strict=True)]
-            for m in maps[0]
-        },
-        hull=shell.hull,
-        mesh_checks=shell.mesh_checks,
-        psnr={},
-        playback_psnr={},
-        cameras=shell.cameras[views],
-        box=shell.box,
-        origins=shell.origins,
-        ellipsoids=shell.ellipsoids,
-    )
+    bake = _grid_file(store, (a0, a1), (e0, e1))
     # a cell whose lower views are under the floor (they see no reflector): the blend keeps
     # the upper two, their weights scaled to sum to 1
     session.camera.elevation = 3.0  # between the rows at -12 and 18 degrees
@@ -119,6 +129,40 @@ def test_the_orbit_bakes_what_a_frame_blends_and_plays_it_as_a_bake_file_would(g
     covered = np.abs(orbit_image).sum(axis=-1) > 0
     assert covered.sum() > 100
     assert np.abs(file_image - orbit_image).max() <= 1e-6 * np.abs(orbit_image).max()
+    session.release()
+
+
+def test_the_orbits_ptm_fits_the_views_around_the_camera_that_saw_the_reflector(gl_ctx, cache):
+    """``em_model=ptm`` on the full orbit: its 4 × 4 window is baked, the row under the floor
+    leaves the fit, and the image is the PTM playback of those views as a bake file."""
+    session = RenderSession(load_scene("room"), ctx=gl_ctx, cube_size=32)
+    method = session.method("pem")
+    method.orbit_store = lambda source, *_: OrbitStore(source, None, STEP, parameters=TINY_PTM)
+    method.values.update({"kd": 0.0, "fresnel_layer": False, "em_model": "ptm"})
+    session.renderer.display["background"] = False
+    session.camera.azimuth, session.camera.elevation = 37.0, 27.0  # the cell 25–55°, 18–48°
+    session.render_offscreen(method, (R, R))
+    ptm_image = session.read_hdr().astype(np.float64)
+    store, blend = method._loaded.orbit, method.last_blend
+    count = len(store.space["azimuths"])
+    rows = sorted({v // count for v in blend.views})
+    window = ptm_blend(store.space, session.camera.position)  # all 16, the row below too
+    assert store.done() >= set(window.views) and len(window.views) == 16
+    assert len(blend.views) == 12 and len(rows) == 3  # the row at −12° saw nothing
+    assert not any(store.sees_reflector(v) for v in set(window.views) - set(blend.views))
+    assert any(w < 0 for w in blend.weights) and np.isclose(sum(blend.weights), 1.0)
+    columns = [v % count for v in blend.views[:4]]  # the window's order: across 360°
+    assert columns[0] == count - 1
+    method.values["em_model"] = "layered"
+    session.render_offscreen(method, (R, R))
+    layered_image = session.read_hdr().astype(np.float64)
+    covered = np.abs(ptm_image).sum(axis=-1) > 0
+    assert covered.sum() > 100 and np.abs(layered_image - ptm_image)[covered].mean() > 1e-3
+    method.values.update({"coverage": "file", "em_model": "ptm"})
+    method.show(_grid_file(store, columns, rows), session.gpu_scene, Path("window.pem"))
+    session.render_offscreen(method, (R, R))
+    file_image = session.read_hdr().astype(np.float64)
+    assert np.abs(file_image - ptm_image).max() <= 1e-5 * np.abs(ptm_image).max()
     session.release()
 
 

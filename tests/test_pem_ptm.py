@@ -97,3 +97,46 @@ def test_ptm_at_a_sample_view_reproduces_its_map_within_the_fit_residual(gl_ctx,
     assert checked > 600
     lookups.release()
     session.release()
+
+
+def _grid_eye(azimuth, elevation):
+    a, e = np.radians(azimuth), np.radians(elevation)
+    return [np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)]
+
+
+def _biquadratic(c, azimuth, elevation):
+    """c[0] + c[1] a + c[2] e + c[3] a² + c[4] a e + c[5] e² in 5°-step units."""
+    a, e = azimuth / 5.0, elevation / 5.0
+    return c[0] + c[1] * a + c[2] * e + c[3] * a * a + c[4] * a * e + c[5] * e * e
+
+
+def test_a_closed_orbits_ptm_window_wraps_and_drops_views_that_saw_nothing():
+    """On a full orbit the 4 × 4 window crosses 360° (azimuths unwrapped about the camera),
+    and views that saw no reflector leave the fit: the weights still give any biquadratic's
+    value at the camera, exactly, from the views kept (seed 003 Figure 7's polynomial)."""
+    azimuths, elevations = [5.0 * k for k in range(72)], [-10.0, -5.0, 0.0, 5.0, 10.0]
+    space = {"kind": "grid", "closed": True, "azimuths": azimuths, "elevations": elevations}
+    space.update(target=[0.0, 0.0, 0.0], distance=1.0)
+    coefficients = np.random.default_rng(3).normal(size=(6, 20))
+    below = set(range(72))  # the row at −10° saw nothing (a camera under the floor)
+    for azimuth, elevation in ((357.5, 2.5), (1.0, -4.0), (183.0, 7.0), (359.0, -6.0)):
+        eye = _grid_eye(azimuth, elevation)
+        for usable in (None, lambda v: v not in below):
+            blend = ptm_blend(space, eye, usable=usable)
+            views = np.array(blend.views)
+            near = azimuth - 360.0 * (azimuth > 180.0)  # the window's azimuths about the camera
+            a = np.array([azimuths[v % 72] for v in views])
+            a = a - 360.0 * (a - near > 180.0)
+            e = np.array([elevations[v // 72] for v in views])
+            c = coefficients.copy()
+            c[5] *= len(set(e)) > 2  # two rows kept do not determine e² (the degree is cut)
+            got = np.asarray(blend.weights) @ _biquadratic(c, a[:, None], e[:, None])
+            want = _biquadratic(c, near, elevation)
+            np.testing.assert_allclose(got, want, atol=1e-9)
+            assert len({v % 72 for v in views.tolist()}) == 4 and np.abs(a - near).max() < 10.0
+            if usable is not None:
+                assert not below & set(views.tolist())
+    # only two rows left: the degree in e is cut to 1, still exact for what they determine
+    blend = ptm_blend(space, _grid_eye(90.0, -7.5), usable=lambda v: v // 72 in (1, 2))
+    e = np.array([elevations[v // 72] for v in blend.views])
+    assert set(e) == {-5.0, 0.0} and abs(np.asarray(blend.weights) @ e - -7.5) < 1e-9

@@ -13,7 +13,8 @@ parameters, fitted by least squares to the maps of the views around the camera
 (:func:`ptm_blend`): on an arc a quadratic in the azimuth through the four
 views about the camera's cell (two bracketing, one beyond each), on a grid
 Malzbender et al.'s biquadratic 1, a, e, a², ae, e² through the 4 × 4 views
-about its cell (fewer at the ends, the degree cut to what they determine). The
+about its cell (fewer at the ends, the degree cut to what they determine; a closed
+orbit's window wraps across 360°, and views that saw no reflector are left out). The
 fitted value at the camera is linear in the maps, Σ_j w_j x_j with w the first row
 of the fit's pseudo-inverse, so the playback evaluates the polynomial of every
 texel by summing the views' lookups with the weights w (of either sign): no
@@ -23,6 +24,7 @@ PTM jumps from one fit to the next.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -161,13 +163,12 @@ def view_blend(view_space: dict, position: npt.ArrayLike, blend: bool = True) ->
     )
 
 
-def _window(count: int, i0: int, u: float) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of the views about cell [i0, i0 + 1] of one axis and their offsets from u."""
-    idx = np.arange(max(0, i0 - 1), min(count - 1, i0 + 2) + 1)
-    return idx, idx - u
-
-
-def ptm_blend(view_space: dict, position: npt.ArrayLike, degree: int = PTM_DEGREE) -> ViewBlend:
+def ptm_blend(
+    view_space: dict,
+    position: npt.ArrayLike,
+    degree: int = PTM_DEGREE,
+    usable: Callable[[int], bool] | None = None,
+) -> ViewBlend:
     """The PTM's views and weights at a camera (module docstring; seed 003 §6, Figure 7).
 
     Parameters
@@ -177,7 +178,12 @@ def ptm_blend(view_space: dict, position: npt.ArrayLike, degree: int = PTM_DEGRE
     position
         (3,) camera eye, world space.
     degree
-        Total degree of the polynomial (per axis at most the window's views − 1).
+        Total degree of the polynomial (per axis at most the window's distinct
+        samples − 1, and lower where the views kept do not determine it).
+    usable
+        View → whether its maps may join the fit (a full orbit's views that saw no
+        reflector hold empty maps); None: every view. Where none is usable the
+        window is fitted as if all were.
 
     Returns
     -------
@@ -188,19 +194,39 @@ def ptm_blend(view_space: dict, position: npt.ArrayLike, degree: int = PTM_DEGRE
     azimuths = np.asarray(view_space["azimuths"], dtype=np.float64)
     elevations = np.asarray(view_space["elevations"], dtype=np.float64)
     azimuth, elevation = camera_angles(position, view_space["target"])
-    a0, _, _, ua = axis_weights(azimuths, azimuth, periodic=True)
-    ia, ta = _window(len(azimuths), a0, ua)
+    closed = bool(view_space.get("closed", False))
+    a0, _, _, ua = axis_weights(azimuths, azimuth, periodic=True, closed=closed)
+    ia, ta = _window(len(azimuths), a0, ua, closed)
     if view_space["kind"] == "grid" and len(elevations) > 1:
         e0, _, _, ue = axis_weights(elevations, elevation)
         ie, te = _window(len(elevations), e0, ue)
     else:
         ue, ie, te = 0.0, np.zeros(1, np.int64), np.zeros(1)
-    da, de = min(degree, len(ia) - 1), min(degree, len(ie) - 1)
-    terms = [(p, q) for p in range(da + 1) for q in range(de + 1) if p + q <= degree]
-    views, rows = [], []
-    for e, t_e in zip(ie, te, strict=True):
-        for a, t_a in zip(ia, ta, strict=True):
-            views.append(int(e) * len(azimuths) + int(a))
-            rows.append([t_a**p * t_e**q for p, q in terms])
-    weights = np.linalg.pinv(np.array(rows))[0]  # the constant term: the value at the camera
-    return ViewBlend(tuple(views), tuple(float(w) for w in weights), (ua, ue))
+    window = [
+        (int(e) * len(azimuths) + int(a), t_a, t_e)
+        for e, t_e in zip(ie, te, strict=True)
+        for a, t_a in zip(ia, ta, strict=True)
+    ]
+    kept = [w for w in window if usable is None or usable(w[0])] or window
+    offsets = np.array([(t_a, t_e) for _, t_a, t_e in kept])
+    for total in range(degree, -1, -1):  # the highest degree the views kept determine
+        caps = [min(total, len(np.unique(offsets[:, axis])) - 1) for axis in (0, 1)]
+        terms = [(p, q) for p in range(caps[0] + 1) for q in range(caps[1] + 1) if p + q <= total]
+        rows = np.array([[t_a**p * t_e**q for p, q in terms] for t_a, t_e in offsets])
+        if np.linalg.matrix_rank(rows) == len(terms):
+            break
+    weights = np.linalg.pinv(rows)[0]  # the constant term: the value at the camera
+    return ViewBlend(tuple(v for v, _, _ in kept), tuple(float(w) for w in weights), (ua, ue))
+
+
+def _window(count: int, i0: int, u: float, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the views about cell [i0, i0 + 1] of one axis and their offsets from u.
+
+    Closed (azimuths all the way round, at least 4): the 4 views i0 − 1 … i0 + 2
+    taken modulo ``count``, their offsets unwrapped.
+    """
+    if closed and count >= 4:
+        idx = np.arange(i0 - 1, i0 + 3)
+        return idx % count, idx - u
+    idx = np.arange(max(0, i0 - 1), min(count - 1, i0 + 2) + 1)
+    return idx, idx - u

@@ -437,7 +437,7 @@ class PemMethod(Method):
         self.last_blend = blend
         views = list(blend.views)
         if loaded.orbit is not None:
-            placed = self._orbit_slots(frame, blend)
+            placed = self._orbit_slots(frame, blend, ptm=MODELS[model] == "ptm")
             if placed is None:  # the window: the views about the camera are still baking
                 set_uniform(program, "u_em_model", MODELS.index("static"))
                 set_uniform(program, "u_use_hull", False)
@@ -466,7 +466,7 @@ class PemMethod(Method):
         return model
 
     def _orbit_slots(
-        self, frame: FrameInputs, blend: ViewBlend
+        self, frame: FrameInputs, blend: ViewBlend, ptm: bool = False
     ) -> tuple[ViewBlend, list[int]] | None:
         """A full orbit's blend over the views that see the reflector, and their slots.
 
@@ -474,11 +474,14 @@ class PemMethod(Method):
         window the background bake is asked for them (and the rest of the orbit
         after), and None is returned until they are there. A view that saw no
         reflector (a camera under the floor) leaves the blend, the others' weights
-        scaled up to sum to 1 (its maps are empty, not the scene).
+        scaled up to sum to 1 (its maps are empty, not the scene). ``ptm``: ``blend``
+        is the PTM's window (weights of either sign), every view of it is baked and
+        the polynomial is fitted again to those that saw the reflector.
         """
         loaded = self._loaded
         orbit = loaded.orbit
-        weighted = [v for v, w in zip(blend.views, blend.weights, strict=True) if w > 0.0]
+        pairs = zip(blend.views, blend.weights, strict=True)
+        weighted = list(blend.views) if ptm else [v for v, w in pairs if w > 0.0]
         weighted = list(dict.fromkeys(weighted or blend.views[:1]))
         slots = loaded.textures.slots(weighted, orbit.load)
         if self.frame_budget_ms is None:
@@ -496,6 +499,10 @@ class PemMethod(Method):
             if slots is None:
                 return None
         where = dict(zip(weighted, slots, strict=True))
+        if ptm:
+            space, eye = loaded.bake.view_space, frame.camera_position
+            blend = ptm_blend(space, eye, usable=orbit.sees_reflector)
+            return blend, [where[v] for v in blend.views]
         pairs = [(v, w) for v, w in zip(blend.views, blend.weights, strict=True) if w > 0.0]
         seen = [(v, w) for v, w in pairs if orbit.sees_reflector(v)]
         if seen and len(seen) < len(pairs):

@@ -4,7 +4,7 @@ Not tests (measurements on a shared machine; docs/pem/orbit.md has the results):
 
     python -m envstudio.methods.pem.orbit_numbers --spacing 40,20,10,5 [--cameras 4]
     python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24] [--em-size 64] \
-        [--fit refit|seed003]
+        [--fit refit|seed003] [--first K]
 
 - :func:`spacing_sweep`: at random cameras (elevations 15°–60°, so that the
   coarsest grid's views stay above the floor), for each spacing s a 2 × 2 grid bake
@@ -14,7 +14,7 @@ Not tests (measurements on a shared machine; docs/pem/orbit.md has the results):
   playback is within 1 dB of the 2× denser grid's (s / 2, the same camera at its
   cell's centre).
 - :func:`orbit_quality`: at random cameras over the whole orbit, the layered
-  PEM, the sphere at infinity and the static EM of the shipped full orbit
+  PEM, the sphere at infinity, the static EM and the PTM of the full orbit
   (methods/pem/bake/orbit.py), each against the ray trace at that camera: PSNR and
   FLIP per camera, and their minimum, median and maximum.
 
@@ -40,7 +40,7 @@ from envstudio.methods.pem import offmanifold
 from envstudio.methods.pem.bake.bake import run_bake
 from envstudio.methods.pem.bake.orbit import ORBIT_BAKE
 from envstudio.methods.pem.bake.views import ELEVATION_LIMIT, grid_views
-from envstudio.methods.pem.blending import view_blend
+from envstudio.methods.pem.blending import ptm_blend, view_blend
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.scene.camera import OrbitCamera
 
@@ -146,19 +146,23 @@ def orbit_quality(
     workers: int | None = None,
     em_size: int = ORBIT_BAKE["em_size"],
     fit: str = "refit",
+    first: int | None = None,
 ) -> dict:
-    """Layered, sphere and static EM of the full orbit at random cameras (module docstring).
+    """Layered, sphere, static EM and PTM of the full orbit at random cameras (module docstring).
 
-    ``fit`` is pem's ``orbit_fit`` (``refit`` or ``seed003``).
+    ``fit`` is pem's ``orbit_fit`` (``refit`` or ``seed003``); ``first`` K measures the
+    first K of the ``cameras`` alone (the same cameras as the whole set's first K).
 
     Returns
     -------
     dict
         ``rows`` per camera, ``summary`` per model the min / median / max of PSNR and
-        FLIP, ``layered_leads`` whether the layered PEM has the best PSNR at every
-        camera, ``bake_seconds`` of the views baked for them.
+        FLIP, ``layered_leads`` whether the layered PEM has a higher PSNR than the
+        sphere at infinity and the static EM at every camera (the issue's rule; the
+        PTM is reported beside them), ``bake_seconds`` of the views baked for them
+        (the PTM's 4 × 4 windows too).
     """
-    picks = random_cameras(cameras)
+    picks = random_cameras(cameras)[:first]
     session = RenderSession(load_scene(scene), cube_size=128)
     try:
         method = session.method("pem")
@@ -171,13 +175,15 @@ def orbit_quality(
             eye = OrbitCamera(azimuth=azimuth, elevation=elevation, target=target).position
             blend = view_blend(space, eye)
             needed += [v for v, w in zip(blend.views, blend.weights, strict=True) if w > 0]
+            if "ptm" in store.shell().maps:
+                needed += ptm_blend(space, eye).views
         start = time.perf_counter()
         report = store.bake(list(dict.fromkeys(needed)), workers=workers)
         bake_seconds = time.perf_counter() - start
         rows = _measure(session, method, picks, size)
     finally:
         session.release()
-    models = ("layered", "sphere", "static")
+    models = [m for m in ("layered", "sphere", "static", "ptm") if f"{m}_psnr" in rows[0]]
     summary = {
         f"{model}_{k}": [
             round(float(f(np.array([r[f"{model}_{k}"] for r in rows]))), 4)
@@ -189,7 +195,9 @@ def orbit_quality(
     return {
         "rows": rows,
         "summary (min, median, max)": summary,
-        "layered_leads": all(r["best"] == "layered" for r in rows),
+        "layered_leads": all(
+            r["layered_psnr"] > max(r["sphere_psnr"], r["static_psnr"]) for r in rows
+        ),
         "views_baked": len(report.baked),
         "bake_seconds": round(bake_seconds, 1),
         "trace_seconds_mean": round(float(np.mean(report.trace_seconds or [0.0])), 3),
@@ -208,14 +216,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int)
     parser.add_argument("--em-size", type=int, default=ORBIT_BAKE["em_size"], help="--orbit")
     parser.add_argument("--fit", choices=("refit", "seed003"), default="refit", help="--orbit")
+    parser.add_argument("--first", type=int, help="--orbit: the first K of the cameras alone")
     args = parser.parse_args(argv)
     if args.spacing:
         steps = tuple(float(s) for s in args.spacing.split(","))
         out = spacing_sweep(args.scene, steps, args.cameras or 4, args.size, args.workers)
     else:
         out = orbit_quality(
-            args.scene, args.cameras or 24, args.size, args.workers, args.em_size, args.fit
-        )
+            args.scene, args.cameras or 24, args.size, args.workers, args.em_size, args.fit,
+            args.first,
+        )  # fmt: skip
     print(json.dumps(out, indent=1))
     return 0
 
