@@ -213,3 +213,13 @@ def test_an_orbit_under_a_replaced_environment_is_refused_and_auto_plays_the_fil
     method.prepare(session.gpu_scene)
     assert method.orbit is None and method.bake.views == 6  # the shipped arc
     session.release()
+
+
+def test_an_orbit_with_the_ptm_is_another_orbit_and_one_without_keeps_its_folder(cache):
+    """The bake's key does not name the models, so an orbit baked before the PTM must not
+    pass for one with it (its views would lack the maps the PTM plays)."""
+    plain = OrbitStore("room", None, STEP, parameters=TINY)
+    with_ptm = OrbitStore("room", None, STEP, parameters=TINY_PTM)
+    assert plain.plan.key == with_ptm.plan.key and plain.key == plain.plan.key
+    assert plain.folder.name == f"orbit-room-{plain.plan.key[:16]}"  # the folder of before
+    assert with_ptm.folder != plain.folder and with_ptm.key != plain.key

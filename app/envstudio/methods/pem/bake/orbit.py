@@ -15,6 +15,7 @@ from their files (methods/pem/resident.py).
 
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 from dataclasses import replace
@@ -46,6 +47,7 @@ __all__ = [
     "OrbitStore",
     "nearest_first",
     "orbit_cache_dir",
+    "orbit_key",
     "prune_orbits",
 ]
 
@@ -81,6 +83,22 @@ ORBIT_CACHE_GB = 4.0
 def orbit_cache_dir() -> Path:
     """``pem`` in envstudio's cache folder (:func:`~envstudio.io.cache_folder.cache_folder`)."""
     return cache_folder("pem")
+
+
+def orbit_key(bake_key: str, models: tuple[str, ...]) -> str:
+    """An orbit's identity: its bake's key (which does not name the models baked), and the
+    PTM's surface textures where it has them (without: the identity of before them).
+
+    Parameters
+    ----------
+    bake_key
+        ``plan_bake(...).key`` of the orbit's views.
+    models
+        The maps each view holds (``plan.models``).
+    """
+    if "ptm" not in models:
+        return bake_key
+    return hashlib.sha256(f"{bake_key}+ptm".encode()).hexdigest()
 
 
 def _last_used(folder: Path) -> float:
@@ -220,7 +238,8 @@ class OrbitStore:
         )
         self.space = self.plan.space.describe()
         self.total = len(self.plan.tasks)
-        name = f"orbit-{self.plan.scene.name}-{self.plan.key[:16]}"
+        self.key = orbit_key(self.plan.key, self.plan.models)
+        name = f"orbit-{self.plan.scene.name}-{self.key[:16]}"
         self.folder = (orbit_cache_dir() if root is None else Path(root)) / name
         self.output = self.folder / "orbit.pem"
         self.parts = parts_folder(self.output)
@@ -249,7 +268,7 @@ class OrbitStore:
         except InputFileError:
             return None
         identity = (bake.parameters.get("orbit_key"), bake.parameters.get("orbit_view"))
-        return bake if identity == (self.plan.key, view) else None
+        return bake if identity == (self.key, view) else None
 
     def sees_reflector(self, view: int) -> bool:
         """Whether the baked ``view`` saw a reflector part (a finite fit PSNR).
@@ -283,7 +302,7 @@ class OrbitStore:
         shell, levels = self.shell(), int(self.plan.parameters["levels"])
         bake = replace(
             shell,
-            parameters={**shell.parameters, "orbit_key": self.plan.key, "orbit_view": view},
+            parameters={**shell.parameters, "orbit_key": self.key, "orbit_view": view},
             maps={m: [result[f"{m}_{k}"][None] for k in range(levels)] for m in self.plan.models},
             psnr={m: np.asarray(result[f"psnr_{m}"])[None] for m in self.plan.models},
             playback_psnr={
@@ -395,7 +414,7 @@ class OrbitStore:
         path = self.folder / "shell.npz"
         try:
             with np.load(path, allow_pickle=False) as data:
-                if str(data["key"]) != self.plan.key:
+                if str(data["key"]) != self.key:
                     return None
                 parts = len(self.plan.tracer.part_names)
                 geometry = {
@@ -424,7 +443,7 @@ class OrbitStore:
             with open(tmp, "wb") as f:
                 np.savez(
                     f,
-                    key=np.array(self.plan.key),
+                    key=np.array(self.key),
                     box=geometry["box"],
                     origins=geometry["origins"],
                     ellipsoids=geometry["ellipsoids"],
