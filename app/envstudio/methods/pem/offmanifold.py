@@ -203,6 +203,7 @@ def wobble_sweep(
     size: int = 128,
     samples: int = 16,
     elevation_above: float = 0.0,
+    start: tuple[float, float] | None = None,
 ) -> dict[str, np.ndarray]:
     """The frame-to-frame changes of a slow sweep, per model (seed 003 §6's wobble and pops).
 
@@ -219,6 +220,9 @@ def wobble_sweep(
         Image edge R and the trace's rays per pixel.
     elevation_above
         Degrees above the arc (0: on the manifold).
+    start
+        (azimuth, elevation) of the first frame in degrees, instead of the arc's first
+        azimuth at ``elevation_above`` over its elevation (a full orbit has no arc).
 
     Returns
     -------
@@ -234,13 +238,14 @@ def wobble_sweep(
     glossy = bake.parameters.get("phong_exponent")  # the lobe the bake traced (issue 31.5)
     display = session.renderer.display
     exposure, tonemap = float(display["exposure"]), str(display["tonemap"])
-    start = float(space["azimuths"][0])
-    elevation = float(space["elevations"][0]) + elevation_above
+    if start is None:
+        start = (float(space["azimuths"][0]), float(space["elevations"][0]) + elevation_above)
+    first, elevation = start
     models = bake_models(bake)
     images: dict[str, list[np.ndarray]] = {m: [] for m in (*models, "trace")}
     masks = []
     for k in range(frames):
-        view = OffManifoldView(f"sweep {k}", start + k * step, elevation)
+        view = OffManifoldView(f"sweep {k}", first + k * step, elevation)
         camera = _camera(space, view)
         traced = tracer.trace(camera, size, samples, 11, glossy)  # one jitter: no flicker
         masks.append((traced.coverage >= 1.0 - 1e-6).any(axis=0))

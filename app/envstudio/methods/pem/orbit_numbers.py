@@ -5,6 +5,7 @@ Not tests (measurements on a shared machine; docs/pem/orbit.md has the results):
     python -m envstudio.methods.pem.orbit_numbers --spacing 40,20,10,5 [--cameras 4]
     python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24] [--em-size 64] \
         [--fit refit|seed003] [--first K]
+    python -m envstudio.methods.pem.orbit_numbers --wobble 22,18 [--size 128]
 
 - :func:`spacing_sweep`: at random cameras (elevations 15°–60°, so that the
   coarsest grid's views stay above the floor), for each spacing s a 2 × 2 grid bake
@@ -17,6 +18,8 @@ Not tests (measurements on a shared machine; docs/pem/orbit.md has the results):
   PEM, the sphere at infinity, the static EM and the PTM of the full orbit
   (methods/pem/bake/orbit.py), each against the ray trace at that camera: PSNR and
   FLIP per camera, and their minimum, median and maximum.
+- :func:`orbit_wobble`: seed 003 §6's wobble and pops of the full orbit along a slow
+  azimuth sweep that crosses a sample view.
 
 Random cameras are uniform over the sphere of directions about the target between
 :data:`LOWEST` and 89° elevation (below, the room's camera is under its floor), at
@@ -44,7 +47,14 @@ from envstudio.methods.pem.blending import ptm_blend, view_blend
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["LOWEST", "main", "orbit_quality", "random_cameras", "spacing_sweep"]
+__all__ = [
+    "LOWEST",
+    "main",
+    "orbit_quality",
+    "orbit_wobble",
+    "random_cameras",
+    "spacing_sweep",
+]
 
 #: The lowest elevation measured, degrees: below about −9.6° the room's camera (3 units
 #: from the teapot, whose floor is 0.5 below it) is under the floor and sees no reflector.
@@ -205,6 +215,35 @@ def orbit_quality(
     }
 
 
+def orbit_wobble(
+    scene: str = "room",
+    start: tuple[float, float] = (22.0, 18.0),
+    frames: int = 24,
+    step: float = 0.25,
+    size: int = 128,
+) -> dict[str, float]:
+    """Seed 003 §6's wobble and pops of the full orbit along an azimuth sweep.
+
+    ``frames`` frames ``step`` degrees apart from ``start`` (azimuth, elevation): the
+    default crosses the sample at 25° on the row at 18°. Per model and ``trace`` the
+    mean frame-to-frame change (the wobble) and, as ``"<model> max"``, the largest (a
+    pop where the sweep crosses a sample: the PTM's window moves on there).
+    """
+    session = RenderSession(load_scene(scene), cube_size=128)
+    try:
+        method = session.method("pem")
+        method.values["coverage"] = "orbit"
+        method.prepare(session.gpu_scene)
+        changes = offmanifold.wobble_sweep(
+            session, method, frames=frames, step=step, size=size, start=start
+        )
+    finally:
+        session.release()
+    out = {name: round(float(np.mean(c)), 5) for name, c in changes.items()}
+    out.update({f"{name} max": round(float(np.max(c)), 5) for name, c in changes.items()})
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print :func:`spacing_sweep` or :func:`orbit_quality` as JSON."""
     parser = argparse.ArgumentParser(prog="python -m envstudio.methods.pem.orbit_numbers")
@@ -217,8 +256,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--em-size", type=int, default=ORBIT_BAKE["em_size"], help="--orbit")
     parser.add_argument("--fit", choices=("refit", "seed003"), default="refit", help="--orbit")
     parser.add_argument("--first", type=int, help="--orbit: the first K of the cameras alone")
+    parser.add_argument(
+        "--wobble", metavar="AZ,EL", help="the orbit's wobble along 6° of azimuth from AZ, EL"
+    )
     args = parser.parse_args(argv)
-    if args.spacing:
+    if args.wobble:
+        azimuth, elevation = (float(v) for v in args.wobble.split(","))
+        out = orbit_wobble(args.scene, (azimuth, elevation), size=args.size)
+    elif args.spacing:
         steps = tuple(float(s) for s in args.spacing.split(","))
         out = spacing_sweep(args.scene, steps, args.cameras or 4, args.size, args.workers)
     else:
