@@ -30,6 +30,7 @@ from envstudio.methods.pem.bake.mip import mip_sizes
 from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.methods.pem.method import shipped_bake
+from envstudio.methods.pem.resident import SLOTS, ResidentViews
 
 R, N = 48, 8
 LOD_BIAS = -1.0  # a bake's level bias (methods/pem/bake/lookups.py): the playback adds it too
@@ -160,6 +161,30 @@ def test_blended_playback_between_views_and_the_hull_split(gl_ctx, room):
     # without the split, hull pixels would show the local layer: the images differ there
     unsplit, _ = _expected(gl_ctx, scene, bake, session.camera, [(0, 0.75), (1, 0.25)])
     assert _relative_error(hdr, unsplit, mask) > 0.05
+    session.release()
+
+
+def test_a_bake_of_more_views_than_the_slots_streams_them_and_plays_the_same(gl_ctx, room):
+    """A file of 20 views (the paper's 100 at 256² are 4.2 GB of maps) is not uploaded whole:
+    the views a frame blends move into 16 resident slots, and the playback is still A·x of
+    those views, also after a sweep over all 20 has evicted and moved them in again."""
+    scene, box, ellipsoids = room
+    bake = _fake_bake(scene, box, ellipsoids, views=SLOTS + 4, seed=3)
+    session, method, _ = _play(gl_ctx, scene, bake, path=0.0, blend=True)
+    textures = method._loaded.textures
+    assert isinstance(textures, ResidentViews) and textures.slot_count == SLOTS
+    for position in np.linspace(0.0, 1.0, 2 * bake.views):  # every view, in and out
+        method.values["path"] = position
+        session.render_offscreen(method, (R, R))
+    assert len(textures.resident) == SLOTS and 0 not in textures.resident  # evicted
+    at = 2.5 / (bake.views - 1)  # between views 2 and 3: moved in again
+    method.values["path"] = at
+    session.render_offscreen(method, (R, R))
+    hdr = session.read_hdr().astype(np.float64)
+    assert method.last_blend.views == (2, 3) and np.allclose(method.last_blend.weights, 0.5)
+    want, mask = _expected(gl_ctx, scene, bake, session.camera, [(2, 0.5), (3, 0.5)])
+    assert mask.sum() > 250 and _relative_error(hdr, want, mask) < 1e-3
+    assert f"16 of {bake.views} views" in method.status_line()
     session.release()
 
 

@@ -41,7 +41,7 @@ from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, 
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
 from envstudio.methods.pem.lookups_gl import GlLookups
 from envstudio.methods.pem.orbit_job import FAILED_RETRY_S, OrbitBakeJob
-from envstudio.methods.pem.resident import ResidentViews
+from envstudio.methods.pem.resident import SLOTS, ResidentViews
 from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import (
     FrameInputs,
@@ -57,6 +57,11 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene
 
 __all__ = ["PemMethod", "shipped_bake"]
+
+
+def _file_view(bake: PemBake, view: int) -> dict[str, list[np.ndarray]]:
+    """One view's maps of a bake file: model → levels of (P, 6, n_k, n_k, C)."""
+    return {m: [level[view] for level in levels] for m, levels in bake.maps.items()}
 
 
 def shipped_bake(scene_name: str) -> Path:
@@ -334,10 +339,17 @@ class PemMethod(Method):
         InputFileError
             A bake of another scene or mesh, or too large for this GL's textures;
             the bake shown before stays.
+
+        Notes
+        -----
+        A bake of more views than :data:`~envstudio.methods.pem.resident.SLOTS` (the
+        paper's 100 views at 256²: 4.2 GB of float32 maps) is not uploaded whole: its
+        views move into the resident slots as the playback blends them.
         """
         check_bake_for_scene(bake, scene.scene, path)
         self._other_environment = _environment_note(bake, scene.scene, path)
-        textures = PemTextures(self.ctx, bake)
+        streamed = bake.views > SLOTS  # a few resident, moved in as blended (the orbit's way)
+        textures = ResidentViews(self.ctx, bake) if streamed else PemTextures(self.ctx, bake)
         self._release_loaded()
         self._missing = ""
         models = [np.array(n.model, dtype=np.float64) for n in scene.reflectors()]
@@ -444,6 +456,8 @@ class PemMethod(Method):
                 return MODELS.index("static")
             blend, views = placed
             self.last_blend = blend
+        elif isinstance(loaded.textures, ResidentViews):  # a large file: its views streamed
+            views = loaded.textures.slots(list(blend.views), lambda v: _file_view(bake, v))
         views = views + [0] * (16 - len(views))
         weights = list(blend.weights) + [0.0] * (16 - len(blend.weights))
         set_uniform(program, "u_view_map", tuple(int(v) for v in views))  # int[16]
@@ -612,10 +626,16 @@ class PemMethod(Method):
             )
         pairs = zip(blend.views, blend.weights, strict=True)
         views = " + ".join(f"{v} ({w:.2f})" for v, w in pairs)
-        mb = self._loaded.textures.megabytes
+        textures = self._loaded.textures
+        if isinstance(textures, ResidentViews):
+            return (
+                f"{len(textures.resident)} of {bake.views} views x {len(bake.parts)} parts "
+                f"resident ({textures.megabytes:.1f} MB; the last moved in in "
+                f"{textures.upload_ms:.0f} ms); blending views {views}"
+            )
         return (
-            f"{bake.views} views x {len(bake.parts)} parts resident ({mb:.1f} MB, uploaded in "
-            f"{self._loaded.textures.upload_ms:.0f} ms); blending views {views}"
+            f"{bake.views} views x {len(bake.parts)} parts resident ({textures.megabytes:.1f} "
+            f"MB, uploaded in {textures.upload_ms:.0f} ms); blending views {views}"
         )
 
     def bench_notes(self) -> dict:
@@ -628,6 +648,14 @@ class PemMethod(Method):
             return {
                 "bake": f"full orbit, {orbit.describe()}",
                 "views_baked": len(orbit.done()),
+                "views_resident": len(textures.resident),
+                "texture_mb": round(textures.megabytes, 2),
+                "view_switch_upload_ms": round(textures.upload_ms, 2),
+                "views_blended": blended,
+            }
+        if isinstance(textures, ResidentViews):  # a large file, streamed
+            return {
+                "bake": str(self._loaded.path),
                 "views_resident": len(textures.resident),
                 "texture_mb": round(textures.megabytes, 2),
                 "view_switch_upload_ms": round(textures.upload_ms, 2),
