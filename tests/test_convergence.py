@@ -179,20 +179,27 @@ def test_an_interrupted_run_saves_its_accumulation_and_the_next_one_resumes_it(g
         while method.status.batches < 3:
             time.sleep(0.01)
         # A real Ctrl-C, mid-run. Once in a full suite (session 7) the signal, sent from this
-        # thread, never became a KeyboardInterrupt and the run went on to its time limit. So
-        # send it again while batches go on: an interrupted run draws no more of them.
+        # thread, never became a KeyboardInterrupt and the run went on to its time limit (SIGINT
+        # ignored, below). Send it again while batches go on: an interrupted run draws no more.
         while not interrupted.is_set():
             sent_at = method.status.batches
             os.kill(os.getpid(), signal.SIGINT)
             while not interrupted.is_set() and method.status.batches < sent_at + 2:
                 time.sleep(0.01)
 
+    # A suite started in the background by a non-interactive shell inherits SIGINT ignored,
+    # and Python then installs no handler: the Ctrl-C would be lost and the run go on to its
+    # time limit. The terminal's Ctrl-C is what is tested, so its handler is put in place.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     thread = threading.Thread(target=interrupt_after_three_batches)
     thread.start()
-    with pytest.raises(KeyboardInterrupt):
-        run_convergence(session, method, (32, 32), 600.0, progress=False, resume=True)
-    interrupted.set()
-    thread.join()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_convergence(session, method, (32, 32), 600.0, progress=False, resume=True)
+    finally:
+        interrupted.set()
+        thread.join()
+        signal.signal(signal.SIGINT, previous)
     interrupted_at = method.status.batches
     expected = method.estimate()
     session.release()
