@@ -15,6 +15,7 @@ import pytest
 from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
 from envstudio.methods.pem.atlas import flat_maps
+from envstudio.methods.pem.bake.bake import neighbours
 from envstudio.methods.pem.bake.orbit import OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake
 from envstudio.methods.pem.blending import ptm_blend
@@ -223,3 +224,26 @@ def test_an_orbit_with_the_ptm_is_another_orbit_and_one_without_keeps_its_folder
     assert plain.plan.key == with_ptm.plan.key and plain.key == plain.plan.key
     assert plain.folder.name == f"orbit-room-{plain.plan.key[:16]}"  # the folder of before
     assert with_ptm.folder != plain.folder and with_ptm.key != plain.key
+
+
+def test_a_coupled_orbit_draws_each_view_towards_its_neighbours_plain_maps(cache):
+    """``orbit_coupling``: the views and their four neighbours (across 360° too) are baked
+    without coupling, in the plain orbit's own cache; each stored view is then nearer the
+    mean of its neighbours' plain maps than its own plain maps are (one coupled pass)."""
+    coupled = OrbitStore("room", None, STEP, parameters={**TINY, "coupling": 1.0})
+    plain = coupled.independent
+    assert plain.folder == OrbitStore("room", None, STEP, parameters=TINY).folder
+    count = len(coupled.space["azimuths"])
+    row = coupled.space["elevations"].index(18.0)  # the scene camera's row
+    views = [row * count, row * count + 1]
+    coupled.bake(views, workers=0)
+    near = neighbours(coupled.space)
+    assert row * count + count - 1 in near[views[0]]  # across 360°
+    assert plain.done() >= set(views) | {n for v in views for n in near[v]}
+    assert coupled.done() == set(views)
+    for view in views:
+        seen = [n for n in near[view] if np.isfinite(plain.result(n)["psnr_distant"][0])]
+        mean = np.mean([plain.result(n)["distant_0"][0] for n in seen], axis=0)
+        alone = np.abs(plain.result(view)["distant_0"][0] - mean).mean()
+        drawn = np.abs(coupled.result(view)["distant_0"][0] - mean).mean()
+        assert len(seen) >= 3 and drawn < 0.7 * alone

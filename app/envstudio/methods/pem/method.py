@@ -141,6 +141,15 @@ class PemMethod(Method):
             choices=("refit", "seed003"),
         ),
         Parameter(
+            "orbit_coupling",
+            "choice",
+            "0",
+            help="Coupling weight γ of the full orbit's views (each its own cache; not in the "
+            "paper): 0, each view inferred alone; 0.1, each inferred again drawn towards its "
+            "four neighbours' maps, which blend with less ghosting (docs/pem/orbit.md).",
+            choices=("0", "0.1"),
+        ),
+        Parameter(
             "em_model",
             "choice",
             "layered",
@@ -182,13 +191,18 @@ class PemMethod(Method):
     )
 
     @staticmethod
-    def orbit_store(source: str, step: float, em_size: int, fit: str = "refit") -> OrbitStore:
+    def orbit_store(
+        source: str, step: float, em_size: int, fit: str = "refit", coupling: float = 0.0
+    ) -> OrbitStore:
         """The full orbit of a scene file, ``step`` degrees apart on both axes, with
         ``em_size``² maps (its views baked with the GL lookups), its layered maps fitted by
-        ``fit`` (``refit`` or ``seed003``: no refit through the composite)."""
+        ``fit`` (``refit`` or ``seed003``: no refit through the composite), its views
+        coupled with weight ``coupling`` (0: each alone)."""
         parameters = {**ORBIT_BAKE, "em_size": int(em_size)}
         if fit == "seed003":
             parameters["over_passes"] = 0
+        if coupling:
+            parameters.update(coupling=float(coupling), coupling_passes=1)
         return OrbitStore(source, GlLookups, (step, step), parameters=parameters)
 
     def __init__(self, ctx: moderngl.Context, programs):
@@ -272,7 +286,8 @@ class PemMethod(Method):
         """What a loaded orbit is valid for: the scene file, the scene, its environment and
         meshes (either may be replaced in place), the grid."""
         meshes = tuple(id(node.mesh) for node in scene.reflectors())
-        chosen = tuple(str(self.values[k]) for k in ("orbit_step", "orbit_em_size", "orbit_fit"))
+        choices = ("orbit_step", "orbit_em_size", "orbit_fit", "orbit_coupling")
+        chosen = tuple(str(self.values[k]) for k in choices)
         where = (scene.scene.source, id(scene), id(scene.scene.environment))
         return ("orbit", *where, meshes, chosen)
 
@@ -299,6 +314,7 @@ class PemMethod(Method):
                 float(self.values["orbit_step"]),
                 int(self.values["orbit_em_size"]),
                 str(self.values["orbit_fit"]),
+                float(self.values["orbit_coupling"]),
             )
         except ValueError as exc:
             raise InputFileError(f"{scene.scene.source}: {exc}") from None

@@ -4,7 +4,7 @@ Not tests (measurements on a shared machine; docs/pem/orbit.md has the results):
 
     python -m envstudio.methods.pem.orbit_numbers --spacing 40,20,10,5 [--cameras 4]
     python -m envstudio.methods.pem.orbit_numbers --orbit [--cameras 24] [--em-size 64] \
-        [--fit refit|seed003] [--first K]
+        [--fit refit|seed003] [--first K] [--coupling 0.1]
     python -m envstudio.methods.pem.orbit_numbers --wobble 22,18 [--size 128]
 
 - :func:`spacing_sweep`: at random cameras (elevations 15°–60°, so that the
@@ -157,11 +157,13 @@ def orbit_quality(
     em_size: int = ORBIT_BAKE["em_size"],
     fit: str = "refit",
     first: int | None = None,
+    coupling: float = 0.0,
 ) -> dict:
     """Layered, sphere, static EM and PTM of the full orbit at random cameras (module docstring).
 
-    ``fit`` is pem's ``orbit_fit`` (``refit`` or ``seed003``); ``first`` K measures the
-    first K of the ``cameras`` alone (the same cameras as the whole set's first K).
+    ``fit`` is pem's ``orbit_fit`` (``refit`` or ``seed003``), ``coupling`` its
+    ``orbit_coupling``; ``first`` K measures the first K of the ``cameras`` alone (the
+    same cameras as the whole set's first K).
 
     Returns
     -------
@@ -177,6 +179,7 @@ def orbit_quality(
     try:
         method = session.method("pem")
         method.values.update({"coverage": "orbit", "orbit_em_size": str(em_size), "orbit_fit": fit})
+        method.values["orbit_coupling"] = f"{coupling:g}"
         method.prepare(session.gpu_scene)
         store = method.orbit
         space, target = store.space, np.asarray(store.space["target"])
@@ -188,7 +191,8 @@ def orbit_quality(
             if "ptm" in store.shell().maps:
                 needed += ptm_blend(space, eye).views
         start = time.perf_counter()
-        report = store.bake(list(dict.fromkeys(needed)), workers=workers)
+        views = list(dict.fromkeys(needed))
+        report = store.bake(views, workers=workers, chunk=len(views))
         bake_seconds = time.perf_counter() - start
         rows = _measure(session, method, picks, size)
     finally:
@@ -256,6 +260,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--em-size", type=int, default=ORBIT_BAKE["em_size"], help="--orbit")
     parser.add_argument("--fit", choices=("refit", "seed003"), default="refit", help="--orbit")
     parser.add_argument("--first", type=int, help="--orbit: the first K of the cameras alone")
+    parser.add_argument("--coupling", type=float, default=0.0, help="--orbit: pem's orbit_coupling")
     parser.add_argument(
         "--wobble", metavar="AZ,EL", help="the orbit's wobble along 6° of azimuth from AZ, EL"
     )
@@ -269,7 +274,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         out = orbit_quality(
             args.scene, args.cameras or 24, args.size, args.workers, args.em_size, args.fit,
-            args.first,
+            args.first, args.coupling,
         )  # fmt: skip
     print(json.dumps(out, indent=1))
     return 0

@@ -80,9 +80,11 @@ __all__ = [
     "BakePlan",
     "BakeReport",
     "ViewTask",
+    "bake_tasks",
     "bake_view",
     "default_rtol",
     "load_part",
+    "neighbour_anchors",
     "neighbours",
     "part_keys",
     "part_name",
@@ -122,14 +124,18 @@ def neighbours(view_space: dict) -> list[list[int]]:
     -------
     list of list of int
         Per view, the adjacent views along the azimuths (an arc does not close:
-        its ends have one) and, on a grid, along the elevations.
+        its ends have one; a full orbit's azimuths do, across 360°) and, on a grid,
+        along the elevations.
     """
     count = len(view_space["azimuths"])
     rows = len(view_space["elevations"]) if view_space.get("kind") == "grid" else 1
+    closed = bool(view_space.get("closed", False)) and count > 2
     out = []
     for e in range(rows):
         for a in range(count):
             near = [(e, a - 1), (e, a + 1), (e - 1, a), (e + 1, a)]
+            if closed:
+                near = [(r, c % count) for r, c in near]
             out.append([r * count + c for r, c in near if 0 <= r < rows and 0 <= c < count])
     return out
 
@@ -804,7 +810,9 @@ def run_bake(
     for k in range(1, passes + 1):
         for colour in (0, 1):  # red-black: a colour's neighbours are all of the other
             half = [
-                replace(t, coupling_pass=k, anchors=_anchors(results, near[t.index], models))
+                replace(
+                    t, coupling_pass=k, anchors=neighbour_anchors(results, near[t.index], models)
+                )
                 for t in tasks
                 if (t.index // count + t.index % count) % 2 == colour
             ]
@@ -825,13 +833,54 @@ def run_bake(
     return report
 
 
+def bake_tasks(
+    tasks: list[ViewTask],
+    output: str | os.PathLike,
+    key: str,
+    models: tuple[str, ...],
+    workers: int | None = None,
+    bar=None,
+    on_view: Callable[[int, dict], None] | None = None,
+) -> BakeReport:
+    """Bake these work units into ``output``'s parts folder, nothing assembled.
+
+    For work units made outside :func:`run_bake`: the full orbit's coupled views
+    (orbit.py), each with its neighbours' anchors. Saved parts are reused, each view
+    is handed to ``on_view`` as it ends.
+
+    Parameters
+    ----------
+    tasks
+        The work units (one bake's: ``key`` and ``models`` are its plan's).
+    output
+        The bake's ``.pem`` path (its parts folder holds the parts).
+    key, models
+        ``BakePlan.key`` and ``BakePlan.models``.
+    workers, bar, on_view
+        As :func:`run_bake`.
+    """
+    start = time.perf_counter()
+    report = BakeReport(bake=None, path=Path(output))  # type: ignore[arg-type]
+    if bar is not None:
+        bar.total = len(tasks)
+    em_size = tasks[0].em_size if tasks else 0
+    _run_pass(
+        tasks, parts_folder(output), key, part_keys(em_size, models), report, bar, on_view,
+        workers, None, None, 2, first=True,
+    )  # fmt: skip
+    report.seconds = time.perf_counter() - start
+    return report
+
+
 def part_name(task: ViewTask) -> str:
     """``view-NNNNN.npz`` (independent pass), ``view-NNNNN-pass-K.npz`` (coupled pass K)."""
     suffix = f"-pass-{task.coupling_pass}" if task.coupling_pass else ""
     return f"view-{task.index:05d}{suffix}.npz"
 
 
-def _anchors(results: dict[int, dict], near: list[int], models: tuple[str, ...]) -> dict | None:
+def neighbour_anchors(
+    results: dict[int, dict], near: list[int], models: tuple[str, ...]
+) -> dict | None:
     """Per model and part, (mean, count) of the neighbours' maps, or None (no neighbour).
 
     The mean is (Σ_k 6 n_k², C) float64, levels concatenated as the solve's unknowns;

@@ -28,7 +28,10 @@ from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_folder import cache_folder
 from envstudio.methods.pem.bake.bake import (
     BakeReport,
+    bake_tasks,
     load_part,
+    neighbour_anchors,
+    neighbours,
     part_name,
     parts_folder,
     plan_bake,
@@ -72,6 +75,13 @@ ORBIT_BAKE = {
 }
 
 
+#: The parameters that couple an orbit's views (without them: the orbit of before).
+COUPLING_KEYS = ("coupling", "coupling_passes")
+
+#: Views a coupled orbit bakes at a time (their neighbours first, uncoupled): nearest
+#: first, a few at a time, so the first views about the camera come soon.
+COUPLED_CHUNK = 4
+
 #: zstd level of a view's file: fast (level 19, the bake file's, takes seconds a view).
 VIEW_ZSTD_LEVEL = 3
 
@@ -111,7 +121,7 @@ def _folder_bytes(folder: Path) -> int:
     return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
 
 
-def prune_orbits(root: Path, keep: Path, cap_bytes: float) -> list[Path]:
+def prune_orbits(root: Path, keep: Path | tuple[Path, ...], cap_bytes: float) -> list[Path]:
     """Delete the least recently used orbit folders under ``root`` while they exceed the cap.
 
     Parameters
@@ -119,8 +129,8 @@ def prune_orbits(root: Path, keep: Path, cap_bytes: float) -> list[Path]:
     root
         The orbits' cache folder (:func:`orbit_cache_dir`).
     keep
-        The orbit in use, never deleted (it alone may exceed the cap: its views are
-        what the user is looking at).
+        The orbit in use (and a coupled orbit's uncoupled one), never deleted (they alone
+        may exceed the cap: their views are what the user is looking at).
     cap_bytes
         The cap on all ``orbit-*`` folders together, bytes.
 
@@ -129,9 +139,10 @@ def prune_orbits(root: Path, keep: Path, cap_bytes: float) -> list[Path]:
     list of Path
         The folders deleted, oldest first.
     """
-    others = [p for p in Path(root).glob("orbit-*") if p.is_dir() and p != Path(keep)]
+    kept = {Path(keep)} if isinstance(keep, (str, Path)) else {Path(k) for k in keep}
+    others = [p for p in Path(root).glob("orbit-*") if p.is_dir() and p not in kept]
     sizes = {p: _folder_bytes(p) for p in others}
-    total = sum(sizes.values()) + (_folder_bytes(Path(keep)) if Path(keep).exists() else 0)
+    total = sum(sizes.values()) + sum(_folder_bytes(k) for k in kept if k.exists())
     deleted = []
     for folder in sorted(others, key=_last_used):
         if total <= cap_bytes:
@@ -202,7 +213,10 @@ class OrbitStore:
     root
         The cache folder; default :func:`orbit_cache_dir`.
     parameters
-        The bake's size, samples, em_size and ptm (default :data:`ORBIT_BAKE`).
+        The bake's size, samples, em_size and ptm (default :data:`ORBIT_BAKE`). A
+        ``coupling`` weight γ > 0 (with ``coupling_passes`` 1) stores coupled views: each
+        inferred again, drawn towards its four neighbours' maps of the orbit without
+        coupling (:attr:`independent`, baked first; :meth:`bake`).
 
     Attributes
     ----------
@@ -213,6 +227,9 @@ class OrbitStore:
         view is being baked, the bake's resume folder ``orbit.pem.parts/``.
     total : int
         Views of the orbit.
+    independent : OrbitStore or None
+        A coupled orbit's views without coupling, its anchors (the orbit of the same
+        parameters without ``coupling``: the cache it has, shared); None uncoupled.
     """
 
     def __init__(
@@ -246,6 +263,11 @@ class OrbitStore:
         self._shell: PemBake | None = None
         self._seen: dict[int, bool] = {}  # view → whether it saw a reflector (once baked)
         self._pruned = False  # the other orbits checked against the cache's cap
+        self.independent: OrbitStore | None = None
+        if self.plan.coupling:
+            plain = {k: v for k, v in parameters.items() if k not in COUPLING_KEYS}
+            self.independent = OrbitStore(scene, gl_lookups, step, root, plain)
+            self.independent._pruned = True  # pruned with this orbit, which keeps it
 
     # -- what is baked -----------------------------------------------------------------------
 
@@ -320,9 +342,16 @@ class OrbitStore:
         )
         self.view_path(view).parent.mkdir(parents=True, exist_ok=True)
         save_pem(self.view_path(view), bake, level=VIEW_ZSTD_LEVEL)
-        (self.parts / part_name(self.plan.tasks[view])).unlink(missing_ok=True)
+        (self.parts / part_name(self._task(view))).unlink(missing_ok=True)
 
-    def bake(self, views: list[int], workers: int | None = 1, bar=None) -> BakeReport:
+    def _task(self, view: int):
+        """The work unit whose result is the stored view (coupled: pass 1, no anchors yet)."""
+        task = self.plan.tasks[view]
+        return replace(task, coupling_pass=1) if self.plan.coupling else task
+
+    def bake(
+        self, views: list[int], workers: int | None = 1, bar=None, chunk: int = 0
+    ) -> BakeReport:
         """Bake those of ``views`` not baked yet, in this order, each kept as it finishes.
 
         Parameters
@@ -334,6 +363,9 @@ class OrbitStore:
             the default bakes in one child process).
         bar
             A tqdm bar over the views.
+        chunk
+            A coupled orbit's views baked at a time (0: :data:`COUPLED_CHUNK`; more
+            start fewer worker pools, fewer come sooner).
 
         The first call of a store marks its orbit as used and deletes the least recently
         used other orbits beyond the cache's cap (:func:`prune_orbits`,
@@ -342,14 +374,20 @@ class OrbitStore:
         self.folder.mkdir(parents=True, exist_ok=True)
         if not self._pruned:
             os.utime(self.folder)
-            prune_orbits(self.folder.parent, self.folder, orbit_cache_cap())
+            in_use = (self.folder,) + (
+                () if self.independent is None else (self.independent.folder,)
+            )
+            prune_orbits(self.folder.parent, in_use, orbit_cache_cap())
             self._pruned = True
         for view in self._resume_parts():  # baked, then interrupted before it was kept
-            task = self.plan.tasks[view]
+            task = self._task(view)
             part = load_part(self.parts / part_name(task), self.plan.key, task)
             if part is not None:
                 self._keep(view, part)
         done = self.done()
+        if self.independent is not None:
+            missing = [v for v in dict.fromkeys(views) if v not in done]
+            return self._bake_coupled(missing, workers, bar, chunk or COUPLED_CHUNK)
         return run_bake(
             self.scene_name,
             lambda camera: orbit_views(camera, *self.step),
@@ -365,9 +403,61 @@ class OrbitStore:
             **self.parameters,
         )
 
+    def _bake_coupled(self, views: list[int], workers: int | None, bar, chunk: int) -> BakeReport:
+        """Bake coupled ``views`` a few at a time, nearest first: first the views and their
+        neighbours without coupling (:attr:`independent`), then each view again with the
+        mean of its neighbours' maps as its anchor (one Jacobi pass of the coupled least
+        squares of bake.py, from maps that do not depend on the order views are baked in)."""
+        near = neighbours(self.space)
+        models = self.plan.models
+        report = BakeReport(bake=None, path=self.output)  # type: ignore[arg-type]
+        for first in range(0, len(views), chunk):
+            these = views[first : first + chunk]
+            ring = list(dict.fromkeys(these + [n for v in these for n in near[v]]))
+            self.independent.bake(ring, workers=workers)
+            plain = {v: self.independent.result(v) for v in ring}
+            tasks = [
+                replace(self._task(v), anchors=neighbour_anchors(plain, near[v], models))
+                for v in these
+            ]
+            done = bake_tasks(
+                tasks, self.output, self.plan.key, models, workers, on_view=self._keep
+            )
+            report.baked += done.baked
+            report.trace_seconds += done.trace_seconds
+            report.infer_seconds += done.infer_seconds
+            if bar is not None:
+                bar.update(len(these))
+        return report
+
+    def result(self, view: int) -> dict[str, np.ndarray]:
+        """A baked view's maps and fit PSNRs as the bake's work units give them.
+
+        Returns
+        -------
+        dict
+            ``{model}_{k}`` (P, 6, n_k, n_k, C) float32 and ``psnr_{model}`` (P,).
+
+        Raises
+        ------
+        KeyError
+            ``view`` is not baked (or its file is damaged).
+        """
+        bake = self._read(view)
+        if bake is None:
+            raise KeyError(f"view {view} of {self.folder} is not baked")
+        out = {
+            f"{m}_{k}": np.asarray(level[0], np.float32)
+            for m, levels in bake.maps.items()
+            for k, level in enumerate(levels)
+        }
+        out.update({f"psnr_{m}": np.asarray(bake.psnr[m][0], np.float64) for m in bake.maps})
+        return out
+
     def _resume_parts(self) -> list[int]:
         names = (p.name for p in self.parts.glob("view-*.npz")) if self.parts.is_dir() else ()
-        return [int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()]
+        suffix = "-pass-1.npz" if self.plan.coupling else ".npz"
+        return [int(n[5:10]) for n in names if n == f"view-{n[5:10]}{suffix}" and n[5:10].isdigit()]
 
     # -- what playback needs ---------------------------------------------------------------------
 
