@@ -35,7 +35,7 @@ from envstudio.core.cubemap import faces_to_cross
 from envstudio.engine.images import to_ldr, upright
 from envstudio.errors import InputFileError
 from envstudio.gpu.uniforms import set_uniform
-from envstudio.methods.pem.bake.orbit import ORBIT_BAKE, ORBIT_STEP, OrbitStore
+from envstudio.methods.pem.bake.orbit import ORBIT_BAKE, ORBIT_COUPLING, ORBIT_STEP, OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
 from envstudio.methods.pem.gpu import ATLASES, MODELS, TEXGENS, PemTextures, texgen_defines
@@ -143,10 +143,11 @@ class PemMethod(Method):
         Parameter(
             "orbit_coupling",
             "choice",
-            "0",
+            f"{ORBIT_COUPLING:g}",
             help="Coupling weight γ of the full orbit's views (each its own cache; not in the "
             "paper): 0, each view inferred alone; 0.1, each inferred again drawn towards its "
-            "four neighbours' maps, which blend with less ghosting (docs/pem/orbit.md).",
+            "four neighbours' maps, which blend with less ghosting: the layered PEM then leads "
+            "everywhere measured (docs/pem/orbit.md).",
             choices=("0", "0.1"),
         ),
         Parameter(
@@ -192,7 +193,11 @@ class PemMethod(Method):
 
     @staticmethod
     def orbit_store(
-        source: str, step: float, em_size: int, fit: str = "refit", coupling: float = 0.0
+        source: str,
+        step: float,
+        em_size: int,
+        fit: str = "refit",
+        coupling: float = ORBIT_COUPLING,
     ) -> OrbitStore:
         """The full orbit of a scene file, ``step`` degrees apart on both axes, with
         ``em_size``² maps (its views baked with the GL lookups), its layered maps fitted by

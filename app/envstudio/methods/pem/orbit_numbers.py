@@ -41,7 +41,7 @@ from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
 from envstudio.methods.pem import offmanifold
 from envstudio.methods.pem.bake.bake import run_bake
-from envstudio.methods.pem.bake.orbit import ORBIT_BAKE
+from envstudio.methods.pem.bake.orbit import ORBIT_BAKE, ORBIT_COUPLING
 from envstudio.methods.pem.bake.views import ELEVATION_LIMIT, grid_views
 from envstudio.methods.pem.blending import ptm_blend, view_blend
 from envstudio.methods.pem.lookups_gl import GlLookups
@@ -157,7 +157,7 @@ def orbit_quality(
     em_size: int = ORBIT_BAKE["em_size"],
     fit: str = "refit",
     first: int | None = None,
-    coupling: float = 0.0,
+    coupling: float = ORBIT_COUPLING,
 ) -> dict:
     """Layered, sphere, static EM and PTM of the full orbit at random cameras (module docstring).
 
@@ -225,6 +225,7 @@ def orbit_wobble(
     frames: int = 24,
     step: float = 0.25,
     size: int = 128,
+    coupling: float | None = None,
 ) -> dict[str, float]:
     """Seed 003 §6's wobble and pops of the full orbit along an azimuth sweep.
 
@@ -232,11 +233,14 @@ def orbit_wobble(
     default crosses the sample at 25° on the row at 18°. Per model and ``trace`` the
     mean frame-to-frame change (the wobble) and, as ``"<model> max"``, the largest (a
     pop where the sweep crosses a sample: the PTM's window moves on there).
+    ``coupling`` is pem's ``orbit_coupling`` (None: its default).
     """
     session = RenderSession(load_scene(scene), cube_size=128)
     try:
         method = session.method("pem")
         method.values["coverage"] = "orbit"
+        if coupling is not None:
+            method.values["orbit_coupling"] = f"{coupling:g}"
         method.prepare(session.gpu_scene)
         changes = offmanifold.wobble_sweep(
             session, method, frames=frames, step=step, size=size, start=start
@@ -260,21 +264,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--em-size", type=int, default=ORBIT_BAKE["em_size"], help="--orbit")
     parser.add_argument("--fit", choices=("refit", "seed003"), default="refit", help="--orbit")
     parser.add_argument("--first", type=int, help="--orbit: the first K of the cameras alone")
-    parser.add_argument("--coupling", type=float, default=0.0, help="--orbit: pem's orbit_coupling")
+    parser.add_argument("--coupling", type=float, help="--orbit, --wobble: pem's orbit_coupling")
     parser.add_argument(
         "--wobble", metavar="AZ,EL", help="the orbit's wobble along 6° of azimuth from AZ, EL"
     )
     args = parser.parse_args(argv)
     if args.wobble:
         azimuth, elevation = (float(v) for v in args.wobble.split(","))
-        out = orbit_wobble(args.scene, (azimuth, elevation), size=args.size)
+        out = orbit_wobble(args.scene, (azimuth, elevation), size=args.size, coupling=args.coupling)
     elif args.spacing:
         steps = tuple(float(s) for s in args.spacing.split(","))
         out = spacing_sweep(args.scene, steps, args.cameras or 4, args.size, args.workers)
     else:
         out = orbit_quality(
             args.scene, args.cameras or 24, args.size, args.workers, args.em_size, args.fit,
-            args.first, args.coupling,
+            args.first, ORBIT_COUPLING if args.coupling is None else args.coupling,
         )  # fmt: skip
     print(json.dumps(out, indent=1))
     return 0

@@ -46,6 +46,7 @@ from envstudio.scene.camera import OrbitCamera
 __all__ = [
     "ORBIT_BAKE",
     "ORBIT_CACHE_GB",
+    "ORBIT_COUPLING",
     "ORBIT_STEP",
     "OrbitStore",
     "nearest_first",
@@ -74,6 +75,13 @@ ORBIT_BAKE = {
     "over_passes": 2,
 }
 
+
+#: The full orbit's coupling weight γ (pem's ``orbit_coupling``; not in seed 003): each
+#: view inferred again drawn towards its four neighbours' maps. Part 4's trade on the arc
+#: (docs/pem/README.md); on the orbit the layered PEM then leads the sphere at infinity and
+#: the static EM at all 24 random cameras, not 23, for 0.26 dB at the median
+#: (docs/pem/orbit.md).
+ORBIT_COUPLING = 0.1
 
 #: The parameters that couple an orbit's views (without them: the orbit of before).
 COUPLING_KEYS = ("coupling", "coupling_passes")
