@@ -419,6 +419,8 @@ class OrbitStore:
         near = neighbours(self.space)
         models = self.plan.models
         report = BakeReport(bake=None, path=self.output)  # type: ignore[arg-type]
+        if bar is not None:
+            bar.total = len(views)
         for first in range(0, len(views), chunk):
             these = views[first : first + chunk]
             ring = list(dict.fromkeys(these + [n for v in these for n in near[v]]))
