@@ -10,6 +10,7 @@ import pytest
 
 from envstudio.errors import OutputFileError
 from envstudio.ui import settings as settings_module
+from envstudio.ui.compare_panel import CompareState
 from envstudio.ui.grid import FRACTIONS, GridState
 from envstudio.ui.settings import ViewerSettings, load_settings, save_settings, settings_path
 
@@ -39,6 +40,8 @@ def custom_settings() -> ViewerSettings:
         imgui_ini="[Window][Method]\nPos=8,8\nSize=290,200\n",
         match_glossiness=False,
         grid={"on": True, "picked": ["mirror", "kautz"], "scale": 2},
+        compare={"other": "hwconv", "split": False, "divider": 0.3, "heat": True},
+        panels_shown=False,
     )
 
 
@@ -173,3 +176,27 @@ def test_failure_while_writing_leaves_old_file_and_no_temporary(config_dir, monk
     assert settings_path().read_bytes() == before
     assert sorted(p.name for p in config_dir.iterdir()) == ["settings.json"]
     assert load_settings() == (custom_settings(), None)
+
+
+def test_the_split_screen_is_restored_and_bad_entries_are_named():
+    methods = ["mirror", "hwconv", "kautz"]
+    state = CompareState(other="hwconv")
+    state.settings.divider, state.settings.heat = 0.3, True
+    restored = CompareState()
+    assert restored.restore(state.as_settings(), methods) == []
+    assert restored.as_settings() == state.as_settings()
+
+    gone = CompareState()
+    assert gone.restore({"other": "removed-plugin"}, methods) == []
+    assert gone.other is None
+    bad = CompareState()
+    problems = bad.restore(
+        {"other": 5, "split": "yes", "divider": 2.0, "heat_scale": None}, methods
+    )
+    assert [p.split(" = ")[0] for p in problems] == [
+        "compare.other",
+        "compare.split",
+        "compare.divider",
+        "compare.heat_scale",
+    ]
+    assert bad.as_settings() == CompareState().as_settings()

@@ -24,7 +24,7 @@ import pytest
 from imgui_bundle import imgui
 
 from envstudio.engine.grid_view import tile_layout
-from envstudio.engine.registry import available_methods, ground_truth_class
+from envstudio.engine.registry import available_methods, ground_truth_class, method_class
 from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
@@ -439,3 +439,72 @@ def test_clicking_a_grid_tile_makes_its_method_the_main_view(xvfb, tmp_path):
     record = json.loads(probe.read_text())
     assert record["method"] == "hwconv"
     assert not record["grid"]["on"] and record["render_size"] == list(WINDOW)
+
+
+def changed_values(method: str) -> dict[str, object]:
+    """Non-default values of ``method``'s colours and of its first float parameter (a
+    slider: no rebake), from its declarations."""
+    values: dict[str, object] = {}
+    sliders = [p for p in method_class(method).parameters if p.kind == "float"]
+    for parameter in method_class(method).parameters:
+        if parameter.kind == "color":
+            values[parameter.name] = [0.25, 0.5, 0.75]
+    if sliders:
+        slider = sliders[0]
+        values[slider.name] = slider.default + 0.25 * (slider.maximum - slider.default)
+    return values
+
+
+@pytest.mark.parametrize("method", list(available_methods()))
+def test_the_viewer_starts_again_from_every_setting_it_saved(xvfb, tmp_path, method):
+    """Issue 38 item 1: a settings file with every persisted setting away from its default
+    (the grid on at 1/2 size with two methods picked, as the grid's 200 ms rule leaves it on
+    a slow machine; a split screen; the saved method's values; the display; the camera;
+    the docking layout; the panels hidden) restarts the viewer, which shows that state and
+    saves it back unchanged."""
+    config = tmp_path / "config"
+    config.mkdir()
+    first = run_view(config, xvfb, "--method", method, "--frames", "1")
+    assert first.returncode == 0, first.stderr
+    saved = json.loads((config / "settings.json").read_text())
+    assert "[Docking][Data]" in saved["imgui_ini"]
+    others = [name for name in available_methods() if name != method]
+    picked = [name for name in available_methods() if name in (method, others[0])]
+    values = changed_values(method)
+    saved |= {
+        "method": method,
+        "method_values": {method: values},
+        "display": {"exposure": 1.5, "tonemap": "reinhard", "background": False},
+        "camera": {"azimuth": 40.0, "elevation": 25.0, "distance": 4.0, "target": [0, 0, 0]},
+        "grid": {"on": True, "picked": picked, "scale": 1},
+        "compare": {
+            "other": others[1],
+            "split": False,
+            "divider": 0.3,
+            "heat": True,
+            "heat_scale": 0.5,
+        },
+        "panels_shown": False,
+        "match_glossiness": False,
+    }
+    (config / "settings.json").write_text(json.dumps(saved))
+    probe = tmp_path / "probe.json"
+
+    result = run_view(config, xvfb, "--frames", "2", probe=probe)
+
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stderr and envstudio_lines(result.stderr) == []
+    record = json.loads(probe.read_text())
+    assert record["method"] == method and not record["panels_shown"]
+    assert record["grid"]["on"] and record["grid"]["fraction"] == 0.5
+    assert record["grid"]["status"].startswith("grid at 1/2 size")
+    assert [tile["name"] for tile in record["grid"]["tiles"]] == picked
+    assert record["compare"] == saved["compare"]
+    assert record["display"] == saved["display"]
+    assert record["camera"] == [40.0, 25.0]
+    for name, value in values.items():
+        assert record["values"][name] == pytest.approx(value), name
+    again = json.loads((config / "settings.json").read_text())
+    for key in ("method", "display", "grid", "compare", "panels_shown", "match_glossiness"):
+        assert again[key] == saved[key], key
+    assert again["method_values"][method] | values == again["method_values"][method]

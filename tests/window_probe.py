@@ -7,6 +7,8 @@ rectangle (the dock space's central node, points), its GL viewport (framebuffer
 pixels, origin bottom-left), the size the scene was rendered at, the window and
 framebuffer sizes, and each panel's window rectangle, whether it is docked and
 whether it is on show (a tab behind another is not).
+It records the method on show with its parameter values, the display values, the
+camera's azimuth and elevation and the split screen's state.
 In the grid view it records the tiles (method, GL viewport, render size), the tile
 fraction, the labels' boxes (window points) and the status line's grid text.
 The window tests (tests/test_window_smoke.py) read it beside the screenshot.
@@ -73,6 +75,10 @@ class ProbedViewer(app.Viewer):
             "buffer_size": list(self.wnd.buffer_size),
             "panels": panels,
             "method": self.method_name,
+            "values": self.session.method(self.method_name).values.as_dict(),
+            "display": self.session.renderer.display.as_dict(),
+            "camera": [self.session.camera.azimuth, self.session.camera.elevation],
+            "compare": self.compare.as_settings(),
             "grid": {
                 "on": self.grid.on,
                 "fraction": self.grid.scale.fraction,

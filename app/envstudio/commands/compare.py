@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"envstudio: note: {note}", file=sys.stderr)
     if not comparison.reliable:
         print(
-            f"envstudio: warning: metrics unreliable: {comparison.reference.unreliable_reason}",
+            f"envstudio: warning: metrics unreliable: {comparison.unreliable_reason}",
             file=sys.stderr,
         )
     return 0

@@ -322,6 +322,28 @@ class Comparison:
         """Whether every method's metrics can be trusted (:func:`reliable_against`)."""
         return all(result.reliable for result in self.results)
 
+    @property
+    def unreliable_reason(self) -> str | None:
+        """Why the marked methods' metrics cannot be trusted, or None when all are reliable.
+
+        One reason per reference that left a method unreliable, named by its model when
+        there are several, in the order of the methods; a method whose model no reference
+        renders says so. Never None while :attr:`reliable` is false.
+        """
+        references = self.references or {"": self.reference}
+        reasons: dict[str, None] = {}
+        for result in self.results:
+            if result.reliable:
+                continue
+            run = references.get(result.reference_model or "")
+            reason = run.unreliable_reason if run is not None else None
+            if run is None or reason is None:
+                reason = f"{result.name}: no reference of its reflectance model"
+            elif len(references) > 1:
+                reason = f"reference ({result.reference_model}): {reason}"
+            reasons[reason] = None
+        return "; ".join(reasons) if reasons else None
+
 
 def method_classes(names: Sequence[str]) -> list[type[Method]]:
     """The reference's class and those of ``names`` (registered), each once, reference first.

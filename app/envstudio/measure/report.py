@@ -142,7 +142,6 @@ def format_table(comparison: Comparison) -> str:
     w, h = comparison.size
     az, el, dist = comparison.camera
     display = comparison.display
-    ref = comparison.reference
     lines = [
         f"# envstudio compare: {comparison.scene}, {w}x{h}",
         "",
@@ -179,7 +178,7 @@ def format_table(comparison: Comparison) -> str:
         )
     lines.append("")
     if not comparison.reliable:
-        lines += [f"{UNRELIABLE} unreliable: {ref.unreliable_reason}.", ""]
+        lines += [f"{UNRELIABLE} unreliable: {comparison.unreliable_reason}.", ""]
     lines += [
         f"Metrics on the {METRIC_NOTES['domain']}. PSNR: {METRIC_NOTES['psnr_db']}; SSIM: "
         f"{METRIC_NOTES['ssim']}; FLIP: {METRIC_NOTES['flip']}.",
@@ -221,7 +220,7 @@ def to_json(comparison: Comparison) -> dict:
         "ssaa": comparison.ssaa,
         "mask_pixels": int(comparison.mask.sum()),
         "reliable": comparison.reliable,
-        "unreliable_reason": None if comparison.reliable else ref.unreliable_reason,
+        "unreliable_reason": comparison.unreliable_reason,
         "metrics": METRIC_NOTES,
         "reference": {
             "parameters": ref.parameters,
@@ -315,8 +314,7 @@ def to_html(comparison: Comparison) -> str:
     warning = (
         ""
         if comparison.reliable
-        else f'<p class="warn">{UNRELIABLE} unreliable: '
-        f"{esc(comparison.reference.unreliable_reason)}.</p>"
+        else f'<p class="warn">{UNRELIABLE} unreliable: {esc(comparison.unreliable_reason)}.</p>'
     )
     w, h = comparison.size
     return f"""<!DOCTYPE html>

@@ -323,7 +323,8 @@ class Viewer(WindowConfig):
         wnd.exit_key = None  # Escape is a shortcut, ignored while ImGui has the keyboard
         self.settings = settings
         self.options = options
-        self.panels_shown = not options.hide_panels  # Tab shows and hides them
+        # Tab shows and hides them; --hide-panels wins over the saved state
+        self.panels_shown = settings.panels_shown and not options.hide_panels
         self.status = StatusLine()
         self.jobs = DeferredWork(self.status)
         self.session = RenderSession(start.scene, ctx=ctx)
@@ -387,6 +388,8 @@ class Viewer(WindowConfig):
         self.compare.match = settings.match_glossiness
         if self.options.grid is None:
             problems += self.grid.restore(settings.grid, list(self.methods))
+        if self.options.compare is None:  # the command line wins over the saved split
+            problems += self.compare.restore(settings.compare, list(self.methods))
         if start.spec == (settings.scene or DEFAULT_SCENE):
             problems += restore_camera(self.session.camera, settings.camera)
         rotation = settings.object_rotation
@@ -771,6 +774,8 @@ class Viewer(WindowConfig):
         settings.imgui_ini = imgui.save_ini_settings_to_memory()
         settings.match_glossiness = self.compare.match
         settings.grid = self.grid.as_settings()
+        settings.compare = self.compare.as_settings()
+        settings.panels_shown = self.panels_shown
         try:
             save_settings(settings)
         except (OSError, UserError) as exc:

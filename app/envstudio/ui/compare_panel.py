@@ -7,7 +7,7 @@ second method is chosen. The divider can be dragged in the 3D view.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 from imgui_bundle import imgui
 
@@ -32,6 +32,41 @@ class CompareState:
     dragging: bool = False
     match: bool = True
     match_note: str | None = None
+
+    def as_settings(self) -> dict:
+        """What the settings file keeps: the other method (None: no split) and the split."""
+        return {"other": self.other, **asdict(self.settings)}
+
+    def restore(self, saved: object, methods: list[str]) -> list[str]:
+        """Apply :meth:`as_settings`' table from the settings file; returns what was rejected.
+
+        A method no longer registered is dropped silently (a plugin may be gone).
+        """
+        if not isinstance(saved, dict):
+            return [f"compare = {saved!r}, expected a table"]
+        problems = []
+        other = saved.get("other")
+        if other is None or isinstance(other, str):
+            self.other = other if other in methods else None
+        else:
+            problems.append(f"compare.other = {other!r}, expected a method name")
+        for flag in ("split", "heat"):
+            value = saved.get(flag, getattr(self.settings, flag))
+            if isinstance(value, bool):
+                setattr(self.settings, flag, value)
+            else:
+                problems.append(f"compare.{flag} = {value!r}, expected true or false")
+        for name, low, high in (("divider", 0.0, 1.0), ("heat_scale", 1e-3, 10.0)):
+            value = saved.get(name, getattr(self.settings, name))
+            if (
+                isinstance(value, (int, float))
+                and not isinstance(value, bool)
+                and low <= value <= high
+            ):
+                setattr(self.settings, name, float(value))
+            else:
+                problems.append(f"compare.{name} = {value!r}, expected {low:g} to {high:g}")
+        return problems
 
     def grab(self, x: float, view_width: float) -> bool:
         """Start dragging if a press at ``x`` (from the 3D view's left edge) is on the divider;

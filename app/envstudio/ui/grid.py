@@ -129,9 +129,12 @@ class TileScale:
         return bool(step)
 
     def status(self) -> str | None:
-        """ "grid at 1/2 size: 180 ms" while below full size, else None."""
+        """ "grid at 1/2 size: 180 ms" while below full size, else None; before the first
+        frame's time (a fraction restored from the settings) without the time."""
         if self.index == 0:
             return None
+        if self.shown_ms is None:
+            return f"grid at {self.name} size"
         return f"grid at {self.name} size: {self.shown_ms:.0f} ms"
 
 

@@ -64,6 +64,11 @@ class ViewerSettings:
     grid : dict
         The grid view (ui/grid.py, :meth:`GridState.as_settings`): ``on``, the methods
         ``picked`` (empty: all) and the tile fraction's ``scale`` index.
+    compare : dict
+        The split screen (ui/compare_panel.py, :meth:`CompareState.as_settings`): the
+        ``other`` method (None: none), ``split``, ``divider``, ``heat``, ``heat_scale``.
+    panels_shown : bool
+        The docked panels on show (Tab hides them).
     """
 
     method: str = "mirror"
@@ -80,6 +85,8 @@ class ViewerSettings:
     imgui_ini: str = ""
     match_glossiness: bool = True
     grid: dict = field(default_factory=dict)
+    compare: dict = field(default_factory=dict)
+    panels_shown: bool = True
 
 
 def settings_path() -> Path:
