@@ -4,9 +4,10 @@ brute-force integral, its symmetry, tangent fields, bad input (seed 004 §5.3)."
 import numpy as np
 import pytest
 
-from envstudio.core import banks, latlong, resample
+from envstudio.core import latlong, resample
 from envstudio.errors import ParameterError
 from envstudio.io.meshes import load_mesh
+from envstudio.methods.banks import lobe as banks
 from envstudio.methods.banks.maps import MapSpec, build_cpu, rings_cpu
 from envstudio.methods.banks.method import BanksMethod
 from envstudio.resources import asset_root

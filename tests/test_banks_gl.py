@@ -4,9 +4,9 @@ environment, a sphere against the brute-force Banks integral, the slice view, ba
 import numpy as np
 import pytest
 
-from envstudio.core import banks
 from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
+from envstudio.methods.banks import lobe as banks
 from envstudio.methods.banks.maps import MapSpec, build_cpu, read_map
 from envstudio.scene.environment import Environment
 from test_bad_input import assert_one_line_error, run_cli

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from envstudio.core import latlong
-from envstudio.core.rsibr_warp import g_mirror_inverse, g_normal_inverse
 from envstudio.envmap.conversions import latlong_to_cube, upload_latlong
 from envstudio.errors import InputFileError, ParameterError
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.gpu_bake import bake_gpu
+from envstudio.methods.rsibr.warp import g_mirror_inverse, g_normal_inverse
 
 SIZE = 32
 RGB = np.array([0.25, 0.5, 2.0])

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from envstudio.core.rsibr_warp import view_frame
 from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_texture
 from envstudio.io.scene_setup import build_scene
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.generator import MapGenerator
+from envstudio.methods.rsibr.warp import view_frame
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
@@ -130,7 +130,7 @@ def test_figure_rsibr_warp_writes_figure_4_whose_generated_panel_is_the_method_m
     gl_ctx, tmp_path, capsys
 ):
     from envstudio.cli import main
-    from envstudio.engine.images import to_ldr, upright
+    from envstudio.core.images import to_ldr, upright
     from envstudio.io.images import read_image
 
     output = tmp_path / "figure4.png"

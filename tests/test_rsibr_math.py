@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from envstudio.core import icosahedron as ico
-from envstudio.core import rsibr_warp as w
 from envstudio.core import spheremap
+from envstudio.methods.rsibr import warp as w
 
 
 def _unit(rng: np.random.Generator, n: int) -> np.ndarray:

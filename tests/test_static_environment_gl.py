@@ -9,7 +9,6 @@ from envstudio.core import cubemap
 from envstudio.core.sh import irradiance_sh9
 from envstudio.core.sh_lights import DiffuseProjector
 from envstudio.core.transforms import normal_matrix, rotation_xyz, translation
-from envstudio.engine import sh_irradiance
 from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.envmap.dynamic_cube import DynamicCube
@@ -18,6 +17,7 @@ from envstudio.io.scene_file import load_scene
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Node, Scene, Transform
 from envstudio.scene.primitives import box, uv_sphere
+from envstudio.shading import sh_irradiance
 from test_render_gl import render, six_colour_environment, sphere_geometry, sphere_scene
 
 SIZE = (64, 64)

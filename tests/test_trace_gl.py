@@ -7,13 +7,13 @@ import trimesh
 from trimesh.ray.ray_pyembree import RayMeshIntersector
 
 from envstudio.core.bvh import build_bvh, intersect
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.scene_file import load_scene
 from envstudio.methods.reference.tracing import TraceData, scene_triangles
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene.mesh import MeshData
+from envstudio.shading.gpu_scene import GpuScene
 
 RAYS = 1024
 

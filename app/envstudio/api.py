@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.engine.images import to_ldr
+from envstudio.core.images import to_ldr
 from envstudio.engine.session import RenderSession, material_values, render_until_finished
 from envstudio.errors import ParameterError
 from envstudio.io.scene_setup import build_scene, parse_camera

@@ -18,26 +18,34 @@ module and register the same way (its ``pyproject.toml``); the walk-through is
 ``docs/plugins.md``. Nothing else in the package is public.
 """
 
+from envstudio.core.images import tile, to_ldr, upright
 from envstudio.core.parameters import Parameter, ParameterValues
 from envstudio.core.presets import FRESNEL_PRESETS, fresnel_parameter, kd_parameter
-from envstudio.engine.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
-from envstudio.engine.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
 from envstudio.engine.hooks import Bake, BenchTable, Command, Figure, FigureRequest, Plugin
-from envstudio.engine.images import tile, to_ldr, upright
 from envstudio.engine.method import Method, ReportExtra
-from envstudio.engine.miller_map import MillerDiffuseMap
 from envstudio.engine.protocols import Session
-from envstudio.engine.sh_irradiance import ShIrradiance, sh_parameters
 from envstudio.errors import InputFileError, ParameterError, UserError
 from envstudio.gpu.programs import ShaderCompileError, read_shader
 from envstudio.gpu.timers import PassTimer
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.io.images import write_image
-from envstudio.measure.ground_truth import ConvergenceStatus, GroundTruth
+from envstudio.measure.ground_truth import (
+    MAX_TIME_LIMIT_S,
+    ConvergenceStatus,
+    GroundTruth,
+    duration,
+    is_checkpoint,
+    project_convergence,
+)
+from envstudio.shading.eq8 import EQ8_PARAMETERS, set_eq8_uniforms
+from envstudio.shading.gpu_scene import FrameInputs, GpuNode, GpuScene, StaticEnvironment
+from envstudio.shading.miller_map import MillerDiffuseMap
+from envstudio.shading.sh_irradiance import ShIrradiance, sh_parameters
 
 __all__ = [
     "EQ8_PARAMETERS",
     "FRESNEL_PRESETS",
+    "MAX_TIME_LIMIT_S",
     "Bake",
     "BenchTable",
     "Command",
@@ -62,8 +70,11 @@ __all__ = [
     "ShaderCompileError",
     "StaticEnvironment",
     "UserError",
+    "duration",
     "fresnel_parameter",
+    "is_checkpoint",
     "kd_parameter",
+    "project_convergence",
     "read_shader",
     "set_eq8_uniforms",
     "set_uniform",

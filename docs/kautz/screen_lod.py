@@ -19,7 +19,7 @@ import argparse
 
 import numpy as np
 
-from envstudio.engine.gpu_scene import FrameInputs
+from envstudio.shading.gpu_scene import FrameInputs
 from envstudio.engine.method import Method
 from envstudio.engine.session import RenderSession
 from envstudio.gpu.programs import read_shader

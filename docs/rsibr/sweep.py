@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from envstudio.core import icosahedron as ico
-from envstudio.core.rsibr_warp import view_frame
+from envstudio.methods.rsibr.warp import view_frame
 from envstudio.envmap.conversions import latlong_to_cube, read_texture, upload_latlong
 from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.programs import ProgramLibrary

@@ -1,7 +1,7 @@
-// The 3D map of method `banks` (seed 004 section 5.3; layout in core/banks.py and
+// The 3D map of method `banks` (seed 004 section 5.3; layout in methods/banks/lobe.py and
 // methods/banks/maps.py): texture coordinates of (t, <v,t>) and the glossy radiance there.
 // Include after common/paraboloid.glsl.
-const float BANKS_BORDER = 2.0;  // core/banks.py BORDER
+const float BANKS_BORDER = 2.0;  // methods/banks/lobe.py BORDER
 const float BANKS_PI = 3.14159265358979;
 
 // (u, v, w) of unit tangent t and b = <v,t>: folded onto t_z >= 0 by the symmetry

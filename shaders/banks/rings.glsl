@@ -1,6 +1,6 @@
 #version 430 core
 // Method `banks`, pass 1 of the 3D map (methods/banks/maps.py, seed 004 section 5.3
-// in the ring form of core/banks.py): the environment integrated around rings
+// in the ring form of methods/banks/lobe.py): the environment integrated around rings
 // about every tangent texel t of the front paraboloid face (border included),
 //   R_t(theta_k) = 2 pi / M sum_m L(cos theta_k t + sin theta_k (cos phi_m e1 + sin phi_m e2)),
 // theta_k = (k + 1/2) pi / K, phi_m = (m + 1/2) 2 pi / M, read from the static
@@ -17,7 +17,7 @@ uniform int u_ring_samples;
 
 const float PI = 3.14159265358979;
 
-// Duff et al. 2017: e1, e2 completing unit t (core/banks.py orthonormal_basis).
+// Duff et al. 2017: e1, e2 completing unit t (methods/banks/lobe.py orthonormal_basis).
 void basis(vec3 t, out vec3 e1, out vec3 e2) {
     float sign_z = t.z >= 0.0 ? 1.0 : -1.0;
     float a = -1.0 / (sign_z + t.z);

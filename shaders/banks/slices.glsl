@@ -3,7 +3,7 @@
 // L_banks(t, cos theta_v) (seed 004 section 5.3) as the weighted sum of the ring
 // table of pass 1 (rings.glsl),
 //   rgb = sum_k w_k(theta_v,j) R_t(theta_k),   a = 2 pi sum_k w_k(theta_v,j),
-// the weights of core/banks.py ring_weights (texel (k, j) of u_weights); a is
+// the weights of methods/banks/lobe.py ring_weights (texel (k, j) of u_weights); a is
 // the map of a unit environment, by which the renderer may normalise the lobe.
 #if defined COMPUTE_SHADER
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;

@@ -1,4 +1,4 @@
-// The Banks BRDF of seed 004 section 5.3 (GLSL twin of core/banks.py), shared by
+// The Banks BRDF of seed 004 section 5.3 (GLSL twin of methods/banks/lobe.py), shared by
 // method `banks` and the reference's model=banks:
 //   f = max(0, sqrt(1 - <l,t>^2) sqrt(1 - <v,t>^2) - <l,t><v,t> - s) / (1 - s)^2.
 uniform float u_sharpness;
@@ -31,7 +31,7 @@ void banks_band(float v_dot_t, out float theta0, out float theta1, out float psi
     theta1 = min(pi, psi + w);
 }
 
-// Integral of the lobe over the sphere (core/banks.py lobe_integral, closed form).
+// Integral of the lobe over the sphere (methods/banks/lobe.py lobe_integral, closed form).
 float banks_integral(float v_dot_t) {
     float theta0, theta1, psi;
     banks_band(v_dot_t, theta0, theta1, psi);

@@ -3,7 +3,7 @@
 //   L_o = (1 - F(r.n)) k_d L_diffuse + F(r.n) L_glossy(r),
 // with Schlick's F (seed 000 section 5.2). Each method brings its own L_diffuse,
 // E(n)/pi by its paper's means: SH irradiance (`mirror`, common/sh_irradiance.glsl),
-// Miller's diffuse map (`hwconv`, `banks`, engine/miller_map.py) or Lambertian radiance
+// Miller's diffuse map (`hwconv`, `banks`, shading/miller_map.py) or Lambertian radiance
 // maps (`rsibr`). Include after common/fresnel.glsl in a FRAGMENT_SHADER section whose
 // vertex stage writes the world-space varyings (common/mesh_world.glsl).
 

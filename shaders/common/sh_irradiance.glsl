@@ -1,5 +1,5 @@
 // Irradiance E(n) from SH plus cap lights (seed 000 section 4.1, eq. 12, and past it:
-// core.sh_lights), the diffuse term of `kautz` and `mirror` (engine/sh_irradiance.py).
+// core.sh_lights), the diffuse term of `kautz` and `mirror` (shading/sh_irradiance.py).
 // The uniform block ShIrradiance, which core.sh_lights.DiffuseLighting.block (static
 // environments) or prefilter/sh_reduce.glsl (dynamic ones, on the GPU) fills:
 //   u_sh[i]              vec4(A_l L_i, 0): SH coefficients already convolved with the

@@ -5,7 +5,7 @@
 // term by seed 004 eq. 2 with seed 000's Schlick weights (common/eq8.glsl),
 //   L_o = (1 - F(r.n)) k_d L_diffuse(n) + F(r.n) L_phong(r),
 // L_diffuse being Miller's diffuse map indexed by the normal (section 4,
-// engine/miller_map.py).
+// shading/miller_map.py).
 #if defined VERTEX_SHADER
 #include "common/mesh_vs.glsl"
 #elif defined FRAGMENT_SHADER

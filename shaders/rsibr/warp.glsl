@@ -2,7 +2,7 @@
 // One source map warped into the destination map and accumulated (seed 002 §3.2-§3.4, §4).
 // The destination sphere map is drawn as a tessellated disk (§3.3): each vertex
 // is a destination point p_d, and its texture coordinate in the source map is
-// the inverse of the composed warp of app/envstudio/core/rsibr_warp.py,
+// the inverse of the composed warp of app/envstudio/methods/rsibr/warp.py,
 //     p_s = g^-1(M g(p_d)),   M = T_s^-1 T_d (destination-local -> source-local),
 // with g = g_mirror (u_warp 0) or g_normal (u_warp 1). With u_per_pixel it is
 // evaluated per fragment instead (the per-pixel warp of §6's future work).

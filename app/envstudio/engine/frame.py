@@ -21,13 +21,13 @@ import numpy.typing as npt
 
 from envstudio.core.parameters import ParameterValues
 from envstudio.engine.display import TONEMAPS, display_values
-from envstudio.engine.gpu_scene import FrameInputs, GpuScene
 from envstudio.engine.method import Method
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.timers import PassTimer
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.scene.camera import OrbitCamera
+from envstudio.shading.gpu_scene import FrameInputs, GpuScene
 
 
 @dataclass

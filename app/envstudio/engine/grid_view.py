@@ -28,11 +28,11 @@ from dataclasses import dataclass
 import moderngl
 
 from envstudio.engine.frame import FrameRenderer, FrameStats
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.method import Method
 from envstudio.errors import UserError
 from envstudio.gpu.programs import ShaderCompileError
 from envstudio.scene.camera import OrbitCamera
+from envstudio.shading.gpu_scene import GpuScene
 
 GAP = 2
 """Pixels of background between neighbouring tiles."""

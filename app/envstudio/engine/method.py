@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, ClassVar
 import moderngl
 
 from envstudio.core.parameters import Parameter, ParameterValues
-from envstudio.engine.gpu_scene import FrameInputs, GpuScene
 from envstudio.gpu.programs import ProgramLibrary
+from envstudio.shading.gpu_scene import FrameInputs, GpuScene
 
 if TYPE_CHECKING:  # the protocol of what a hook may use of a session (no import at run time)
     from envstudio.engine.protocols import Session

@@ -13,11 +13,11 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.engine.frame import FrameRenderer, FrameStats
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.method import Method
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene
+from envstudio.shading.gpu_scene import GpuScene
 
 
 class Session(Protocol):

@@ -16,13 +16,13 @@ import numpy.typing as npt
 from envstudio.core.parameters import parse_assignments
 from envstudio.engine.display import DISPLAY_NAMES
 from envstudio.engine.frame import FrameRenderer, FrameStats
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.method import Method
 from envstudio.engine.registry import available_methods, method_class
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.scene.graph import Scene
+from envstudio.shading.gpu_scene import GpuScene
 
 
 def material_values(scene: Scene) -> dict[str, float | str]:

@@ -16,12 +16,12 @@ import moderngl
 
 from envstudio.engine.display import TONEMAPS
 from envstudio.engine.frame import FrameRenderer, FrameStats
-from envstudio.engine.gpu_scene import GpuScene
 from envstudio.engine.method import Method
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.scene.camera import OrbitCamera
+from envstudio.shading.gpu_scene import GpuScene
 
 
 @dataclass

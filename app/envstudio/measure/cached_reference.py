@@ -39,9 +39,9 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
+from envstudio.core.images import displayed
 from envstudio.core.metrics import MIN_SIZE, flip, psnr
 from envstudio.engine.frame import FrameRenderer
-from envstudio.engine.images import displayed
 from envstudio.engine.method import Method
 from envstudio.engine.protocols import Session
 from envstudio.gpu.programs import ProgramLibrary
@@ -307,7 +307,7 @@ class _Keyed:
 
 
 def _display(hdr: npt.NDArray[np.float32], display: dict[str, object]) -> npt.NDArray[np.float32]:
-    """(h, w, 3) float32 display values, as compare's display images (engine/images.py)."""
+    """(h, w, 3) float32 display values, as compare's display images (core/images.py)."""
     exposure, tonemap = float(display["exposure"]), str(display["tonemap"])
     return displayed(hdr, exposure, tonemap).astype(np.float32)
 

@@ -56,10 +56,10 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
+from envstudio.core.images import displayed
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.core.parameters import parse_assignments
 from envstudio.engine.display import DISPLAY_PARAMETERS
-from envstudio.engine.images import displayed
 from envstudio.engine.method import Method, ReportExtra
 from envstudio.engine.registry import ground_truth_class, method_class
 from envstudio.engine.session import RenderSession
@@ -826,6 +826,6 @@ def _summary(samples: list[float]) -> dict[str, float]:
 
 def _display_image(session: RenderSession, hdr: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
     """(h, w, 3) float32 display values of linear ``hdr`` with the session's display settings
-    (engine/images.py's twin of the display shader), unquantised, in [0, 1]."""
+    (core/images.py's twin of the display shader), unquantised, in [0, 1]."""
     display = session.renderer.display
     return displayed(hdr, float(display["exposure"]), str(display["tonemap"])).astype(np.float32)

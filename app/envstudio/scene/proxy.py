@@ -10,7 +10,7 @@ here a world-space axis-aligned box or a sphere, declared in the scene file's
 
 The probe C is the point the cube map is captured from: ``probe`` when the scene
 declares one, otherwise the reflectors' centre, where the static environment is
-captured (engine/gpu_scene.py). It must lie inside the proxy: the rays are cast from
+captured (shading/gpu_scene.py). It must lie inside the proxy: the rays are cast from
 inside, and a probe outside would look up the proxy's far side.
 
 The GLSL twin is shaders/parallax/proxy.glsl; tests/test_parallax_gl.py holds the two

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from envstudio.engine.images import tile
+from envstudio.core.images import tile
 from envstudio.io.atomic import write_text_atomic
 from envstudio.io.images import read_image, write_image
 from envstudio.measure.atlas.grid import AtlasGrid

@@ -1,6 +1,6 @@
 """The 3D map L_banks(t, ⟨v,t⟩) of seed 004 §5.3, built on the GPU or in NumPy.
 
-Both builders evaluate the ring form of core/banks.py from the static
+Both builders evaluate the ring form of methods/banks/lobe.py from the static
 environment's cube map (its box mip level whose texels are about one ring bin
 wide, :func:`ring_level`):
 
@@ -8,7 +8,7 @@ wide, :func:`ring_level`):
    front paraboloid face (with border) and every bin k — (T, T, K) values;
 2. slices: L_banks(t, cos θ_v,j) = Σ_k w_k(θ_v,j) R_t(θ_k) for every slice j, and
    in alpha the same sum for a unit environment, 2π Σ_k w_k (the lobe's
-   integral at that slice, :func:`envstudio.core.banks.lobe_integral` to 1e-4),
+   integral at that slice, :func:`envstudio.methods.banks.lobe.lobe_integral` to 1e-4),
    so that the renderer can normalise the lobe by a value filtered exactly as
    the map is.
 
@@ -31,11 +31,10 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
-from envstudio.core import banks
 from envstudio.core.resample import sample_cube
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.gpu.timers import PassTimer
-from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.banks import lobe as banks
+from envstudio.plugin import PassTimer, set_uniform
 from envstudio.prefilter.mip_chain import box_mip_chain
 
 _GROUP = 8  # compute work-group edge (rings.glsl, slices.glsl)

@@ -8,7 +8,7 @@ than OpenGL 4.3); a change of s alone reuses the ring table and redoes only the
 cheap second pass. The reflector then looks the map up with the tangent of the
 material's tangent field (scene/tangents.py) and the view, per vertex or per
 pixel, and combines it with Fresnel and Miller's diffuse map (seed 004 §4,
-engine/miller_map.py) by seed 004 eq. 2 with seed 000's Schlick weights
+shading/miller_map.py) by seed 004 eq. 2 with seed 000's Schlick weights
 (shaders/banks/banks.glsl). ``view=slice`` shows one slice of the map at
 ∠(v, t) = ``slice_angle`` as the frame (seed 004 Figure 6, right).
 
@@ -24,12 +24,8 @@ import time
 
 import moderngl
 
-from envstudio.engine.materials import BANKS_MATERIAL_PARAMETERS
-from envstudio.engine.tangent_buffers import TangentBuffers
 from envstudio.envmap.conversions import read_cube
-from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.banks.maps import GpuMapBuilder, MapSpec, build_cpu, map_texture, upload
 from envstudio.plugin import (
     EQ8_PARAMETERS,
@@ -37,9 +33,13 @@ from envstudio.plugin import (
     Method,
     MillerDiffuseMap,
     Parameter,
+    ParameterError,
     set_eq8_uniforms,
+    set_uniform,
 )
 from envstudio.scene.tangents import TangentField
+from envstudio.shading.materials import BANKS_MATERIAL_PARAMETERS
+from envstudio.shading.tangent_buffers import TangentBuffers
 
 VIEWS = ("reflector", "slice")
 BUILDERS = ("gpu", "cpu")

@@ -42,10 +42,8 @@ from tqdm import tqdm
 from envstudio.core.colormap import magma
 from envstudio.core.paraboloid import texel_directions
 from envstudio.core.resample import sample_paraboloid
-from envstudio.errors import ParameterError
-from envstudio.io.images import write_image
 from envstudio.methods.hwconv.radii import plan_filters
-from envstudio.plugin import Session
+from envstudio.plugin import ParameterError, Session, write_image
 from envstudio.prefilter.brute_force import downsample_latlong, phong
 from envstudio.prefilter.glossiness import fibonacci_directions, reference_height
 

@@ -28,8 +28,8 @@ import numpy as np
 from envstudio.envmap.conversions import cube_to_paraboloid
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, kernel_weights
+from envstudio.plugin import set_uniform
 
 __all__ = ["FaceMaps", "ParaboloidConvolution"]
 

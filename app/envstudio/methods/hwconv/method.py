@@ -14,7 +14,7 @@ every frame with ``refilter_every_frame``, as in the paper's timing table):
    at its shrunk mip level, and blends them with weight d² (skipped in ``one_pass``);
 
 then the reflector reads the result along the reflection vector and combines it
-with Miller's diffuse map indexed by the normal (seed 004 §4, engine/miller_map.py)
+with Miller's diffuse map indexed by the normal (seed 004 §4, shading/miller_map.py)
 by seed 004 eq. 2 with seed 000's Schlick weights (shaders/hwconv/hwconv.glsl). N and ε only
 change the kernel weights, uniforms of one compiled program: no recompile.
 ``view`` shows S, L, the blended map or the source as the frame instead.
@@ -32,9 +32,7 @@ from pathlib import Path
 
 import moderngl
 
-from envstudio.errors import ParameterError
 from envstudio.gpu.fullscreen import FullscreenPass
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.hwconv.convolution import FaceMaps, ParaboloidConvolution
 from envstudio.methods.hwconv.radii import MAX_KERNEL, FilterPlan, plan_filters
 from envstudio.plugin import (
@@ -43,7 +41,9 @@ from envstudio.plugin import (
     Method,
     MillerDiffuseMap,
     Parameter,
+    ParameterError,
     ReportExtra,
+    set_uniform,
 )
 
 #: Choices of ``view``: the reflector, or one of the maps as the frame.

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.errors import ParameterError
+from envstudio.plugin import ParameterError
 
 __all__ = [
     "MAX_KERNEL",

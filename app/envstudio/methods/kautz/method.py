@@ -48,11 +48,9 @@ from __future__ import annotations
 
 import moderngl
 
-from envstudio.engine.sh_irradiance import STATIC_HEIGHT
 from envstudio.envmap.dynamic_cube import DynamicCube
 from envstudio.envmap.mipmaps import build_cross_face_mipmaps, mipmapped_cube
 from envstudio.gpu.context import require_version
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.plugin import (
     FrameInputs,
     Method,
@@ -60,8 +58,10 @@ from envstudio.plugin import (
     ShIrradiance,
     fresnel_parameter,
     kd_parameter,
+    set_uniform,
     sh_parameters,
 )
+from envstudio.shading.sh_irradiance import STATIC_HEIGHT
 
 __all__ = ["STATIC_HEIGHT", "KautzMethod"]
 

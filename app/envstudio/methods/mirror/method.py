@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import moderngl
 
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.plugin import (
     EQ8_PARAMETERS,
     FrameInputs,
     Method,
     ShIrradiance,
     set_eq8_uniforms,
+    set_uniform,
     sh_parameters,
 )
 
@@ -20,7 +20,7 @@ class MirrorMethod(Method):
 
     L_o = (1 − F) · k_d · E(n)/π + F · L_env(r), with Schlick F(r·n) of f_λ
     (seed 000 eq. 8, section 5.2) and E(n) the irradiance ``kautz`` has: SH
-    (eq. 12) plus cap lights (engine/sh_irradiance.py), by default 49
+    (eq. 12) plus cap lights (shading/sh_irradiance.py), by default 49
     coefficients and 32 lights, within 0.2 % of the exact irradiance on the
     shipped maps. Both read the scene's static environment
     (GpuScene.static_environment): the local objects drawn over the far field as

@@ -31,7 +31,7 @@ rather than where it would be seen from the probe (shaders/parallax/parallax.gls
   about r covers a patch |x − p|·θ wide on the proxy, which the probe sees under
   θ·|x − p| / |x − c|; a Phong lobe is about N^−½ wide, so the lookup takes
   N' = N·(|x − c| / |x − p|)². Off with ``distance_correction=false``.
-- **Diffuse.** SH irradiance E(n) of the static environment (engine/sh_irradiance.py),
+- **Diffuse.** SH irradiance E(n) of the static environment (shading/sh_irradiance.py),
   combined with the glossy term by seed 000 eq. 8 with Schlick's F, as ``mirror``.
 
 Without a proxy, a scene whose only light is the environment at infinity needs no
@@ -47,7 +47,6 @@ import moderngl
 import numpy as np
 
 from envstudio.envmap.dynamic_cube import DynamicCube
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.plugin import (
     EQ8_PARAMETERS,
     FrameInputs,
@@ -57,6 +56,7 @@ from envstudio.plugin import (
     ShIrradiance,
     UserError,
     set_eq8_uniforms,
+    set_uniform,
     sh_parameters,
 )
 from envstudio.prefilter.chain_gpu import gpu_phong_cube_chain

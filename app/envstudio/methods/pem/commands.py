@@ -20,7 +20,7 @@ import sys
 import numpy as np
 from tqdm import tqdm
 
-from envstudio.errors import OutputFileError, ParameterError
+from envstudio.errors import OutputFileError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.memory import available_memory
 from envstudio.io.scene_file import load_scene, resolve_scene
@@ -36,7 +36,7 @@ from envstudio.methods.pem.bake.views import (
     uncovered,
 )
 from envstudio.methods.pem.lookups_gl import GlLookups
-from envstudio.plugin import Bake
+from envstudio.plugin import Bake, ParameterError
 from envstudio.scene.camera import OrbitCamera
 
 __all__ = ["BAKE", "DEFAULTS", "add_bake_arguments", "run_bake", "run_bake_pem"]

@@ -7,9 +7,9 @@ import time
 import moderngl
 import numpy as np
 
-from envstudio.errors import InputFileError
 from envstudio.methods.pem.atlas import ATLAS_WIDTH, pack_atlas, pack_flags
 from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.plugin import InputFileError
 
 __all__ = ["ATLASES", "MODELS", "TEXGENS", "PemTextures", "texgen_defines"]
 

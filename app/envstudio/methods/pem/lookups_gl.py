@@ -21,8 +21,8 @@ from envstudio.core.transforms import normal_matrix
 from envstudio.gpu.context import create_headless_context
 from envstudio.gpu.mesh import GpuMesh
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.pem.bake.lookups import MODELS, PixelLookups
+from envstudio.plugin import set_uniform
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.graph import Scene
 

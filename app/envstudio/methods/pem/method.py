@@ -32,9 +32,6 @@ import moderngl
 import numpy as np
 
 from envstudio.core.cubemap import faces_to_cross
-from envstudio.engine.images import to_ldr, upright
-from envstudio.errors import InputFileError
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.pem.bake.orbit import ORBIT_BAKE, ORBIT_COUPLING, ORBIT_STEP, OrbitStore
 from envstudio.methods.pem.bake.pem_file import PemBake, load_pem
 from envstudio.methods.pem.blending import ViewBlend, camera_angles, ptm_blend, view_blend
@@ -46,11 +43,15 @@ from envstudio.methods.pem.verify import check_bake_for_scene
 from envstudio.plugin import (
     FrameInputs,
     GpuScene,
+    InputFileError,
     Method,
     Parameter,
     ReportExtra,
     fresnel_parameter,
     kd_parameter,
+    set_uniform,
+    to_ldr,
+    upright,
 )
 from envstudio.resources import asset_root
 from envstudio.scene.camera import OrbitCamera

@@ -24,10 +24,10 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.metrics import compare_images
-from envstudio.engine.images import to_ldr
 from envstudio.methods.pem.bake.infer import psnr as linear_psnr
 from envstudio.methods.pem.bake.trace import SceneTracer
 from envstudio.methods.pem.gpu import MODELS
+from envstudio.plugin import to_ldr
 from envstudio.scene.camera import OrbitCamera
 
 __all__ = [

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from envstudio.errors import InputFileError
 from envstudio.methods.pem.bake.hull import mesh_check
 from envstudio.methods.pem.bake.pem_file import PemBake
+from envstudio.plugin import InputFileError
 from envstudio.scene.graph import Scene
 
 __all__ = ["check_bake_for_scene"]

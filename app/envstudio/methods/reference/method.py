@@ -48,19 +48,8 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.env_sampling import LUMINANCE, EnvironmentDistribution
-from envstudio.engine.materials import BANKS_MATERIAL_PARAMETERS
-from envstudio.engine.tangent_buffers import TangentBuffers
 from envstudio.gpu.context import is_software_renderer, require_version
-from envstudio.gpu.programs import read_shader
 from envstudio.gpu.shader_source import preprocess
-from envstudio.gpu.uniforms import set_uniform
-from envstudio.measure.ground_truth import (
-    MAX_TIME_LIMIT_S,
-    ConvergenceStatus,
-    duration,
-    is_checkpoint,
-    project_convergence,
-)
 from envstudio.methods.reference.sample_allocation import (
     MAX_MULTIPLIER,
     SOFTWARE_SAMPLES_PER_BATCH,
@@ -68,14 +57,23 @@ from envstudio.methods.reference.sample_allocation import (
 )
 from envstudio.methods.reference.tracing import TraceData
 from envstudio.plugin import (
+    MAX_TIME_LIMIT_S,
+    ConvergenceStatus,
     FrameInputs,
     GpuScene,
     Method,
     Parameter,
+    duration,
     fresnel_parameter,
+    is_checkpoint,
     kd_parameter,
+    project_convergence,
+    read_shader,
+    set_uniform,
 )
 from envstudio.scene.tangents import TangentField
+from envstudio.shading.materials import BANKS_MATERIAL_PARAMETERS
+from envstudio.shading.tangent_buffers import TangentBuffers
 
 MODELS = ("phong", "microfacet", "banks")
 SEQUENCES = ("random", "sobol")
@@ -680,7 +678,7 @@ class ReferenceMethod(Method):
         for gpu_node in reflectors:
             set_uniform(program, "u_model", gpu_node.model)
             set_uniform(program, "u_normal_matrix", gpu_node.normal)
-            if banks:  # the tangents of the banks material (engine/tangent_buffers.py)
+            if banks:  # the tangents of the banks material (shading/tangent_buffers.py)
                 self._tangent_buffers.render(program, gpu_node, field)
             else:
                 gpu_node.mesh.render(program)

@@ -15,8 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.bvh import FlatBVH, build_bvh
-from envstudio.gpu.uniforms import set_uniform
-from envstudio.plugin import GpuScene
+from envstudio.plugin import GpuScene, set_uniform
 
 NODE_BINDING = 0
 TRIANGLE_BINDING = 1

@@ -15,12 +15,12 @@ import time
 from tqdm import tqdm
 
 from envstudio.core.parameters import parse_assignments
-from envstudio.errors import ContextError, ParameterError
+from envstudio.errors import ContextError
 from envstudio.io.atomic import check_output_path
 from envstudio.io.images import read_environment
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.bake.brdfs import brdf
-from envstudio.plugin import Bake
+from envstudio.plugin import Bake, ParameterError
 
 __all__ = ["BAKE", "MAX_SIZE", "add_bake_arguments", "bake_environment", "run_bake_rsibr"]
 

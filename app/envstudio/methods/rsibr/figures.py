@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.engine.images import GAP
+from envstudio.core.images import GAP
 from envstudio.envmap.conversions import read_texture
 from envstudio.plugin import Figure, FigureRequest, to_ldr, upright, write_image
 

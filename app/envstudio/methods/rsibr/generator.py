@@ -24,10 +24,10 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.icosahedron import view_weights
-from envstudio.core.rsibr_warp import singularity_uv
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.gpu.uniforms import set_uniform
+from envstudio.methods.rsibr.warp import singularity_uv
+from envstudio.plugin import set_uniform
 
 __all__ = ["MapGenerator", "disk_mesh"]
 

@@ -13,13 +13,13 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import read_texture
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.rsibr.bake.bake import RsibrBake, geodesic_views
 from envstudio.methods.rsibr.bake.brdfs import brdf
+from envstudio.methods.rsibr.warp import view_frame
+from envstudio.plugin import set_uniform
 
 __all__ = ["DEFAULT_SAMPLES", "GpuBaker", "bake_gpu"]
 
@@ -76,7 +76,7 @@ class GpuBaker:
         set_uniform(program, "u_cube_size", float(cube.size[0]))
         set_uniform(program, "u_frame", np.asarray(frame, dtype=np.float32))
         set_uniform(program, "u_brdf", spec.code)
-        # samples 0: the cube holds E(n)/pi already (engine/miller_map.py), read along n
+        # samples 0: the cube holds E(n)/pi already (shading/miller_map.py), read along n
         set_uniform(program, "u_samples", max(int(samples), 1))
         set_uniform(program, "u_irradiance_cube", int(samples) == 0)
         set_uniform(program, "u_phong_exponent", values.get("phong_exponent", 1.0))

@@ -17,14 +17,13 @@ import time
 import moderngl
 import numpy as np
 
-from envstudio.core.rsibr_warp import view_frame
 from envstudio.envmap.conversions import read_cube
-from envstudio.errors import InputFileError
 from envstudio.io.cache_entries import discard
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.generator import MapGenerator
 from envstudio.methods.rsibr.gpu_bake import GpuBaker
-from envstudio.plugin import StaticEnvironment
+from envstudio.methods.rsibr.warp import view_frame
+from envstudio.plugin import InputFileError, StaticEnvironment
 
 __all__ = ["MapSet"]
 

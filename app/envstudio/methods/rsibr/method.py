@@ -34,8 +34,6 @@ from dataclasses import replace
 import moderngl
 import numpy as np
 
-from envstudio.engine.images import to_ldr, upright
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.rsibr.bake import bake as rb
 from envstudio.methods.rsibr.bake.brdfs import BRDFS, brdf
 from envstudio.methods.rsibr.figures import figure4
@@ -50,6 +48,9 @@ from envstudio.plugin import (
     StaticEnvironment,
     fresnel_parameter,
     kd_parameter,
+    set_uniform,
+    to_ldr,
+    upright,
 )
 
 __all__ = ["RsibrMethod"]
@@ -95,7 +96,7 @@ class RsibrMethod(Method):
             "prefiltered",
             choices=("prefiltered", "baked"),
             help="Lambertian maps of k_d: prefiltered (each texel E(n)/pi from Miller's map, "
-            "engine/miller_map.py) or baked (importance-sampled, diffuse_samples).",
+            "shading/miller_map.py) or baked (importance-sampled, diffuse_samples).",
             applies_when={"brdf": "phong"},
         ),
         Parameter(

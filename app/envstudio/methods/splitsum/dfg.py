@@ -35,10 +35,11 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core import ggx
-from envstudio.errors import InputFileError, OutputFileError
+from envstudio.errors import OutputFileError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_entries import discard
 from envstudio.io.cache_folder import cache_folder
+from envstudio.plugin import InputFileError
 
 __all__ = [
     "SAMPLES",

@@ -17,7 +17,7 @@ Schlick F of f0 = ``fresnel``; diffuse k_d/π (1 − F(n·v)) E(n)):
 - c = 1 + f0 (1/(A + B) − 1): Fdez-Agüera's multiple-scattering energy compensation
   (JCGT 8(1), 2019) as Filament writes it, with ``multiscatter`` (on by default);
   off, c = 1, the single-scattering model the reference renders.
-- E(n): SH irradiance with cap lights (engine/sh_irradiance.py), sun-robust by default.
+- E(n): SH irradiance with cap lights (shading/sh_irradiance.py), sun-robust by default.
 
 Roughness ↔ level: Filament's mapping (prefilter.roughness, shared with ``envstudio
 prefilter --chain --kernel ggx``; cmgen: "map the lod to a linear_roughness,
@@ -45,7 +45,6 @@ import time
 import moderngl
 import numpy as np
 
-from envstudio.gpu.uniforms import set_uniform
 from envstudio.methods.splitsum.dfg import load_dfg_table
 from envstudio.plugin import (
     EQ8_PARAMETERS,
@@ -55,6 +54,7 @@ from envstudio.plugin import (
     ShIrradiance,
     StaticEnvironment,
     set_eq8_uniforms,
+    set_uniform,
     sh_parameters,
 )
 from envstudio.prefilter import roughness

@@ -2,7 +2,7 @@
 
 A bake is one map per geodesic view direction v_j (the 12 icosahedron vertices,
 or the 42 of its subdivision), each in the frame T_j of a camera looking from
-v_j (core.rsibr_warp.view_frame), with the faces that §4's
+v_j (methods.rsibr.warp.view_frame), with the faces that §4's
 FindSubtendedTriangle searches: the viewer reads the views from the file, so it
 is "decoupled from any specific choice of sphere map sampling view directions".
 
@@ -43,12 +43,12 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core.icosahedron import icosahedron, subdivide
-from envstudio.core.rsibr_warp import view_frame
 from envstudio.errors import InputFileError, ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_folder import cache_folder
 from envstudio.methods.rsibr.bake.brdfs import brdf
 from envstudio.methods.rsibr.bake.cpu import bake_view_cpu
+from envstudio.methods.rsibr.warp import view_frame
 from envstudio.resources import shader_root
 
 __all__ = [

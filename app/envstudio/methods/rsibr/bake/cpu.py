@@ -22,8 +22,8 @@ import numpy.typing as npt
 from envstudio.core import latlong
 from envstudio.core.fresnel import schlick
 from envstudio.core.resample import sample_latlong
-from envstudio.core.rsibr_warp import g_mirror, g_normal
 from envstudio.methods.rsibr.bake.brdfs import brdf
+from envstudio.methods.rsibr.warp import g_mirror, g_normal
 
 __all__ = ["bake_view_cpu", "downsample", "texel_uv", "working_height"]
 
@@ -88,7 +88,7 @@ def bake_view_cpu(
     values
         All its parameters (:meth:`Brdf.values`).
     frame : (3, 3) float
-        The view's camera frame T_j (core.rsibr_warp.view_frame).
+        The view's camera frame T_j (methods.rsibr.warp.view_frame).
     size
         Map edge n in texels.
     progress

@@ -24,11 +24,11 @@ import numpy as np
 
 from envstudio.core import cubemap
 from envstudio.core.resample import cube_to_latlong
-from envstudio.engine.gpu_scene import FrameInputs
-from envstudio.engine.sh_irradiance import DYNAMIC_FACE_SIZE, STATIC_HEIGHT, static_map
 from envstudio.envmap.conversions import read_cube
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.prefilter import hierarchical, kernels
+from envstudio.shading.gpu_scene import FrameInputs
+from envstudio.shading.sh_irradiance import DYNAMIC_FACE_SIZE, STATIC_HEIGHT, static_map
 
 __all__ = ["FACE_SIZE", "MillerDiffuseMap", "diffuse_faces"]
 

@@ -12,8 +12,8 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from envstudio.engine.gpu_scene import GpuNode
 from envstudio.scene.tangents import TangentField, Tangents, mesh_tangents
+from envstudio.shading.gpu_scene import GpuNode
 
 
 class TangentBuffers:

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from envstudio.core.parameters import ParameterValues
 from envstudio.core.presets import fresnel_parameter, kd_parameter
-from envstudio.engine.gpu_scene import FrameInputs
 from envstudio.gpu.uniforms import set_uniform
+from envstudio.shading.gpu_scene import FrameInputs
 
 #: f_λ and k_d of eq. 8, linear RGB (a grey by default; f_λ takes core/presets.py's names).
 EQ8_PARAMETERS = (

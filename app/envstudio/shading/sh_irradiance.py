@@ -26,12 +26,12 @@ import numpy.typing as npt
 
 from envstudio.core.parameters import Parameter, ParameterValues
 from envstudio.core.sh_lights import DiffuseProjector
-from envstudio.engine.gpu_scene import FrameInputs, GpuScene
 from envstudio.envmap.conversions import read_cube
 from envstudio.gpu.context import has_compute
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.prefilter.brute_force import downsample_latlong
 from envstudio.prefilter.sh_gpu import GpuDiffuseProjector, block_rows
+from envstudio.shading.gpu_scene import FrameInputs, GpuScene
 
 __all__ = [
     "DYNAMIC_FACE_SIZE",
