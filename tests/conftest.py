@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from envstudio.gpu.context import create_headless_context
-from envstudio.gpu.programs import ProgramLibrary
+from envstudio.gpu.programs import ProgramLibrary, add_shader_folder
+
+# the tests' probe shaders (``testing/<file>``), beside the tests and outside the wheel
+add_shader_folder(Path(__file__).with_name("shaders") / "testing")
 
 
 @pytest.fixture(autouse=True)

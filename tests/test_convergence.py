@@ -10,7 +10,7 @@ import pytest
 
 from envstudio.engine.session import RenderSession
 from envstudio.measure.convergence import format_convergence, run_convergence
-from envstudio.methods.reference.method import is_checkpoint, project_convergence
+from envstudio.plugin import is_checkpoint, project_convergence
 from envstudio.scene.environment import Environment
 from test_reference_gl import smooth_environment
 from test_render_gl import sphere_scene

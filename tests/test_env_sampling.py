@@ -6,7 +6,7 @@ from envstudio.core import latlong
 from envstudio.core.env_sampling import EnvironmentDistribution, luminance
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.io.images import read_environment
-from envstudio.methods.reference.method import _EnvironmentTables
+from envstudio.methods.reference.environment_tables import EnvironmentTables
 from envstudio.resources import asset_root
 
 
@@ -30,7 +30,7 @@ def test_gpu_sampler_follows_the_tables(gl_ctx, programs):
     img = np.full((16, 32, 3), 0.01, np.float32)
     img[5, 7] = 50.0
     img[10, 20] = 25.0
-    tables = _EnvironmentTables(gl_ctx, img)
+    tables = EnvironmentTables(gl_ctx, img)
     program = programs.get("testing/env_sampling_probe.glsl")
     tables.bind(program, 1)
     target = gl_ctx.texture((128, 128), 4, dtype="f4")

@@ -264,7 +264,8 @@ def test_the_subdivided_teapot_matches_its_trace_as_well_as_the_shipped_one(tmp_
 
 
 def test_the_solve_tolerance_is_a_bake_parameter_only_when_it_is_not_the_default(capsys):
-    """--rtol (docs/pem/paper.md): absent from the parameters and the key at the default, so
+    """--rtol (studies/pem-paper-scale/README.md): absent from the parameters and the key at the
+    default, so
     bakes made before it resume and compare bit for bit; recorded otherwise; bad values refused."""
     from envstudio.methods.pem.bake.bake import SOLVE_RTOL, plan_bake
 

@@ -31,7 +31,7 @@ def _playback(azimuth: float, elevation: float, passes: int) -> dict[str, float]
 
 
 def test_each_pass_lowers_the_composite_error_and_grazing_views_gain():
-    # along the floor (the orbit's 300°, −7°) and from above (25°, 88°): docs/pem/orbit.md
+    # along the floor (the orbit's 300°, −7°) and from above (25°, 88°): studies/pem-orbit/README.md
     for azimuth, elevation in ((300.0, -7.0), (25.0, 88.0)):
         runs = [_playback(azimuth, elevation, k) for k in (0, 1, 2)]
         layered = [r["layered"] for r in runs]

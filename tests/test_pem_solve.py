@@ -84,6 +84,7 @@ def test_parts_solved_with_the_multigrid_are_not_the_parts_of_before():
         parts[em_size] = _part_header(plan.key, plan.tasks[0])["task"]
     assert "solver" not in parts[MULTIGRID_SIZE // 2]
     assert parts[MULTIGRID_SIZE]["solver"] == "multigrid"
-    # its default tolerance is its own too (docs/pem/paper.md: 10⁻⁶'s playback to 0.015 dB)
+    # its default tolerance is its own too (studies/pem-paper-scale/README.md: 10⁻⁶'s playback
+    # to 0.015 dB)
     assert "rtol" not in parts[MULTIGRID_SIZE // 2]
     assert parts[MULTIGRID_SIZE]["rtol"] == MULTIGRID_RTOL > SOLVE_RTOL

@@ -5,6 +5,7 @@ to import or takes a name gives one line and leaves every other method working."
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 import os
 import shutil
@@ -16,30 +17,45 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from envstudio.engine.registry import available_methods, ground_truth_class
+from envstudio.commands.methods import markdown_table
+from envstudio.engine.registry import (
+    ENTRY_POINT_GROUP,
+    SHIPPED_DISTRIBUTION,
+    available_methods,
+    ground_truth_class,
+)
 from envstudio.io.images import read_image
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = [
-    "mirror",
-    "rsibr",
-    "hwconv",
-    "banks",
-    "pem",
-    "kautz",
-    "parallax",
-    "splitsum",
-    "reference",
-]
 COLOUR = (0.2, 0.6, 0.9)
 AMBIENT = 0.25
 
 
+def shipped_plugins() -> list:
+    """The shipped distribution's plugins, read from its entry points (the one place a
+    shipped method is declared), in their declared order."""
+    points = importlib.metadata.distribution(SHIPPED_DISTRIBUTION).entry_points
+    plugins = [p.load() for p in points if p.group == ENTRY_POINT_GROUP]
+    return sorted(plugins, key=lambda plugin: plugin.order)
+
+
 def test_shipped_methods_come_in_the_declared_order():
     """mirror, the seeds by their papers' publication (1999, 2000 §5.2, §5.3, 2001, 2004),
-    today's engines' (2012, 2013), then the ground truth."""
-    assert list(available_methods()) == SHIPPED
-    assert ground_truth_class().name == "reference"
+    today's engines' (2012, 2013), then the ground truth: each plugin's declared order."""
+    plugins = shipped_plugins()
+    assert [p.name for p in plugins][:2] == ["mirror", "rsibr"] and len(plugins) >= 9
+    assert list(available_methods()) == [p.name for p in plugins]
+    (truth,) = [p for p in plugins if p.ground_truth]
+    assert ground_truth_class().name == truth.name == "reference" == plugins[-1].name
+
+
+def test_the_readme_lists_the_registry():
+    """The README's table of methods is ``envstudio methods --markdown``, row for row."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = readme.split("<!-- methods: envstudio methods --markdown -->\n")[1]
+    block = block.split("\n<!-- end methods -->")[0]
+    described = [cls.describe() for cls in available_methods().values()]
+    assert block == markdown_table(described)
 
 
 def _pip_install(source: Path, target: Path) -> None:
@@ -124,7 +140,7 @@ def test_an_installed_plugin_is_listed_after_the_shipped_methods_and_bad_ones_ar
 ):
     result = _envstudio(plugin_site, "methods", "--json", cwd=tmp_path)
     methods = json.loads(result.stdout)["methods"]
-    assert [m["name"] for m in methods] == [*SHIPPED, "flat"]
+    assert [m["name"] for m in methods] == [*available_methods(), "flat"]
     flat = methods[-1]
     assert flat["parameters"][0] == {
         "name": "colour",

@@ -1,7 +1,7 @@
 """The GPU Phong cube mip chain (prefilter.chain_gpu, issue 14): FIS against the brute force.
 
 Tolerances are the errors measured on these maps with the default samples
-(docs/prefilter/README.md, "The chain on the GPU"), with a margin of about 1.5.
+(studies/prefilter-speed/README.md, "The chain on the GPU"), with a margin of about 1.5.
 """
 
 from __future__ import annotations

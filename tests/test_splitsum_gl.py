@@ -12,9 +12,9 @@ from envstudio.engine.session import RenderSession
 from envstudio.envmap.conversions import read_cube
 from envstudio.methods.splitsum import dfg
 from envstudio.methods.splitsum.method import level_alphas
-from envstudio.methods.splitsum.numpy_reference import ggx_integral_and_split_sum
 from envstudio.prefilter import brute_force, kernels
 from envstudio.scene.environment import Environment
+from splitsum_numpy_reference import ggx_integral_and_split_sum
 from test_render_gl import render, six_colour_environment, sphere_geometry, sphere_scene
 
 FAST = {"chain_size": "32", "chain_samples": 64, "sh_coefficients": "9", "lights": 0}

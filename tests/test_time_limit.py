@@ -10,11 +10,8 @@ from imgui_bundle import imgui
 from envstudio.core.parameters import ParameterValues
 from envstudio.engine.session import RenderSession
 from envstudio.measure import ground_truth_cache
-from envstudio.methods.reference.method import (
-    SCHEDULING_PARAMETERS,
-    ReferenceMethod,
-    median_relative_error,
-)
+from envstudio.methods.reference.batch_statistics import median_relative_error
+from envstudio.methods.reference.method import SCHEDULING_PARAMETERS, ReferenceMethod
 from envstudio.scene.environment import Environment
 from envstudio.ui.parameter_widgets import parameter_widgets
 from envstudio.ui.status import StatusLine

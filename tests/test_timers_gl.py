@@ -14,7 +14,8 @@ from envstudio.gpu.timers import PassTimer
 def test_context_offers_what_the_reference_and_kautz_need(gl_ctx):
     # storage buffers and compute shaders (4.3). llvmpipe answers 4.5 to any request, so
     # this cannot show that 4.3 is asked for first; that mattered on NVIDIA's EGL, which
-    # gives exactly the version requested (seen on the H100, docs/kautz "On a GPU")
+    # gives exactly the version requested (seen on the H100, studies/kautz-border-and-sun,
+    # "On a GPU")
     assert gl_ctx.version_code >= PREFERRED_VERSION
 
 

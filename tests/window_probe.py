@@ -65,6 +65,7 @@ class ProbedViewer(app.Viewer):
                     "docked": window.dock_node is not None,
                     "shown": window.active and not window.hidden and not window.skip_items,
                 }
+        labels = self.view_renderer.grid_labels if self.grid.on else []
         ProbedViewer.record = {
             "frames": self.frames_drawn,
             "panels_shown": self.panels_shown,
@@ -74,8 +75,8 @@ class ProbedViewer(app.Viewer):
             "window_size": list(self.wnd.size),
             "buffer_size": list(self.wnd.buffer_size),
             "panels": panels,
-            "method": self.method_name,
-            "values": self.session.method(self.method_name).values.as_dict(),
+            "method": self.choice.name,
+            "values": self.session.method(self.choice.name).values.as_dict(),
             "display": self.session.renderer.display.as_dict(),
             "camera": [self.session.camera.azimuth, self.session.camera.elevation],
             "compare": self.compare.as_settings(),
@@ -86,7 +87,7 @@ class ProbedViewer(app.Viewer):
                     {"name": t.name, "viewport": list(t.viewport), "size": list(t.render_size)}
                     for t in self.grid.tiles
                 ],
-                "labels": [list(box) for box in self.grid_labels] if self.grid.on else [],
+                "labels": [list(box) for box in labels],
                 "status": self.status.mode_text,
             },
         }

@@ -1,4 +1,5 @@
-"""``envstudio methods [--json]``: every method in the declared order, with its parameters."""
+"""``envstudio methods [--json | --markdown]``: every method in the declared order, with its
+parameters (or, ``--markdown``, the README's table of methods)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,34 @@ from envstudio.engine.hooks import Command
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--json``."""
-    parser.add_argument("--json", action="store_true", help="machine-readable output")
+    """``--json`` or ``--markdown``."""
+    output = parser.add_mutually_exclusive_group()
+    output.add_argument("--json", action="store_true", help="machine-readable output")
+    output.add_argument(
+        "--markdown",
+        action="store_true",
+        help="one table row a method: name, title, paper, reflectance model, summary (the "
+        "README's list of methods is this output)",
+    )
+
+
+def markdown_table(described: list[dict]) -> str:
+    """The methods as a Markdown table, one row each in the declared order.
+
+    Parameters
+    ----------
+    described : list of dict
+        :meth:`Method.describe` of each method.
+    """
+    rows = [
+        "| method | title | paper | reflectance | what it does |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for entry in described:
+        cells = [f"`{entry['name']}`", entry["title"], entry["paper"], entry["reflectance"]]
+        cells.append(entry["summary"])
+        rows.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+    return "\n".join(rows)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -26,6 +53,9 @@ def run(args: argparse.Namespace) -> int:
                 indent=2,
             )
         )
+        return 0
+    if args.markdown:
+        print(markdown_table(described))
         return 0
     for entry in described:
         print(f"{entry['name']}: {entry['title']} — {entry['summary']}")

@@ -27,7 +27,7 @@ horizon of n its irradiance is n·V, exactly what the tile gives, so the cap
 only approximates the tile's shape where it straddles the horizon.
 With τ = 1, K = 32 and the residual at order 6 (``BAND_SETS[49]``) the mean
 relative irradiance error is at most 0.18 % and the maximum at most 6.2 % on
-all eight shipped maps (docs/kautz/README.md, which also gives the settings
+all eight shipped maps (studies/kautz-border-and-sun/README.md, which also gives the settings
 that were measured and rejected). shaders/prefilter/sh_project.glsl and reduce.glsl
 compute the same decomposition on the GPU from a cube map.
 """

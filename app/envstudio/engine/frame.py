@@ -13,7 +13,7 @@ comparisons against the reference.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Protocol
 
 import moderngl
 import numpy as np
@@ -21,7 +21,7 @@ import numpy.typing as npt
 
 from envstudio.core.parameters import ParameterValues
 from envstudio.engine.display import TONEMAPS, display_values
-from envstudio.engine.method import Method
+from envstudio.engine.frame_stats import FrameStats
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.timers import PassTimer
@@ -30,17 +30,19 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.shading.gpu_scene import FrameInputs, GpuScene
 
 
-@dataclass
-class FrameStats:
-    """Timing of one frame in milliseconds per pass, and the clock used."""
+class ReflectorPass(Protocol):
+    """What a frame asks of the method drawing its reflectors.
 
-    passes_ms: dict[str, float]
-    clock: str
+    :class:`~envstudio.engine.method.Method` is the one implementation; naming it here
+    would make the method contract (whose session protocol names this renderer) and
+    the frame import each other.
+    """
 
-    @property
-    def total_ms(self) -> float:
-        """Sum of the passes."""
-        return sum(self.passes_ms.values())
+    def steer_camera(self, camera: OrbitCamera) -> None:
+        """Move the camera before the frame."""
+
+    def render(self, frame: FrameInputs) -> None:
+        """Draw every reflector of ``frame.scene`` into the bound framebuffer."""
 
 
 class FrameRenderer:
@@ -75,7 +77,7 @@ class FrameRenderer:
         return self._fbo
 
     def render_hdr(
-        self, scene: GpuScene, method: Method, camera: OrbitCamera, size: tuple[int, int]
+        self, scene: GpuScene, method: ReflectorPass, camera: OrbitCamera, size: tuple[int, int]
     ) -> None:
         """Render background, local objects and the method's reflectors into the HDR target."""
         method.steer_camera(camera)
@@ -100,7 +102,7 @@ class FrameRenderer:
     def render(
         self,
         scene: GpuScene,
-        method: Method,
+        method: ReflectorPass,
         camera: OrbitCamera,
         size: tuple[int, int],
         target: moderngl.Framebuffer,

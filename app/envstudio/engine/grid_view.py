@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import moderngl
 
-from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.frame import FrameRenderer
+from envstudio.engine.frame_stats import FrameStats
 from envstudio.engine.method import Method
 from envstudio.errors import UserError
 from envstudio.gpu.programs import ShaderCompileError

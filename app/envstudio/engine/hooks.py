@@ -16,8 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from envstudio.engine.method import Method
-from envstudio.engine.protocols import Session
+from envstudio.engine.method import Method, Session
 
 #: Adds a command's own options to its parser.
 AddArguments = Callable[[argparse.ArgumentParser], None]

@@ -1,4 +1,5 @@
-"""The renderer contract (DESIGN.md): a method, its declared parameters, its report sections.
+"""The renderer contract (DESIGN.md): a method, its declared parameters, its report sections,
+and the session its hooks are handed.
 
 A method draws the scene's reflectors into the bound HDR framebuffer (linear
 radiance). It owns its GPU resources, prepares lazily (what depends on the
@@ -9,6 +10,10 @@ parameter is declared ``rebuild=True``. An environment-map method looks the
 environment up in ``frame.scene.static_environment()`` (seed 003's static EM:
 the local objects drawn over the far field), not in ``GpuScene.cube``, and keys
 what it derives from it on that object's ``revision``.
+
+:class:`Session` is beside :class:`Method` because each names the other; the
+session that drives methods (:mod:`envstudio.engine.session`) imports this module,
+never the reverse.
 """
 
 from __future__ import annotations
@@ -16,17 +21,19 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar, Protocol
 
 import moderngl
+import numpy as np
+import numpy.typing as npt
 
 from envstudio.core.parameters import Parameter, ParameterValues
+from envstudio.engine.frame import FrameRenderer
+from envstudio.engine.frame_stats import FrameStats
 from envstudio.gpu.programs import ProgramLibrary
+from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.graph import Scene
 from envstudio.shading.gpu_scene import FrameInputs, GpuScene
-
-if TYPE_CHECKING:  # the protocol of what a hook may use of a session (no import at run time)
-    from envstudio.engine.protocols import Session
-    from envstudio.scene.camera import OrbitCamera
 
 
 @dataclass
@@ -176,3 +183,30 @@ class Method(ABC):
             "reflectance": cls.reflectance,
             "parameters": [p.describe() for p in cls.parameters],
         }
+
+
+class Session(Protocol):
+    """What a method's hooks (report sections, figures, bench tables) may use of a session.
+
+    :class:`envstudio.engine.session.RenderSession` is the one implementation:
+    a scene on the GPU, its camera, the frame renderer and the methods' instances.
+    """
+
+    ctx: moderngl.Context
+    programs: ProgramLibrary
+    gpu_scene: GpuScene
+    renderer: FrameRenderer
+    camera: OrbitCamera
+
+    @property
+    def scene(self) -> Scene: ...
+
+    def method(self, name: str) -> Method: ...
+
+    def apply(self, method: Method, assignments: list[str]) -> None: ...
+
+    def render_offscreen(self, method: str | Method, size: tuple[int, int]) -> FrameStats: ...
+
+    def read_ldr(self) -> npt.NDArray[np.uint8]: ...
+
+    def read_hdr(self) -> npt.NDArray[np.float32]: ...

@@ -15,7 +15,8 @@ import numpy.typing as npt
 
 from envstudio.core.parameters import parse_assignments
 from envstudio.engine.display import DISPLAY_NAMES
-from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.frame import FrameRenderer
+from envstudio.engine.frame_stats import FrameStats
 from envstudio.engine.method import Method
 from envstudio.engine.registry import available_methods, method_class
 from envstudio.errors import ParameterError

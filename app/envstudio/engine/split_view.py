@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import moderngl
 
 from envstudio.engine.display import TONEMAPS
-from envstudio.engine.frame import FrameRenderer, FrameStats
+from envstudio.engine.frame import FrameRenderer
+from envstudio.engine.frame_stats import FrameStats
 from envstudio.engine.method import Method
 from envstudio.gpu.fullscreen import FullscreenPass
 from envstudio.gpu.programs import ProgramLibrary

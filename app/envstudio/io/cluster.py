@@ -40,7 +40,7 @@ def dask_client(scheduler: str, timeout: float = SCHEDULER_TIMEOUT_S, workers: i
         # Without distributed's MALLOC_TRIM_THRESHOLD_: setting it fixes glibc's mmap threshold,
         # so every large temporary of a solve is mapped and unmapped afresh; the PEM bake's
         # multigrid solve ran 2.7 times slower on the workers than on the pool with it
-        # (docs/pem/paper.md).
+        # (studies/pem-paper-scale/README.md).
         with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
             cluster = LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None

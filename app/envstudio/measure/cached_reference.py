@@ -42,8 +42,7 @@ import numpy.typing as npt
 from envstudio.core.images import displayed
 from envstudio.core.metrics import MIN_SIZE, flip, psnr
 from envstudio.engine.frame import FrameRenderer
-from envstudio.engine.method import Method
-from envstudio.engine.protocols import Session
+from envstudio.engine.method import Method, Session
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.measure.ground_truth import UNTRACED_TOO
 from envstudio.measure.ground_truth_cache import (

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from envstudio.engine.protocols import Session
+from envstudio.engine.method import Session
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import atomic_path
 from envstudio.io.cache_entries import discard

@@ -16,7 +16,7 @@ and no constant b makes up for that. On the studio bunny at 256² that LOD spans
 2.1–5.7 levels over the reflector (10th–90th percentile, textureQueryLod). The
 matched b at level mode gives 19.8 dB against the reference. Bias mode gives
 5.6 dB at the matched b, 15.3 dB with b corrected by the median LOD, and at most
-16.4 dB at b = 0, the mirror (docs/kautz). The reverse match, N from a mip
+16.4 dB at b = 0, the mirror (studies/kautz-border-and-sun). The reverse match, N from a mip
 method's b, takes b as a level too; it leaves that method's ``lod_mode`` as it
 is and says so in its line when that is ``bias``.
 """

@@ -23,7 +23,7 @@ pre-averaged texels instead of aliasing.
 
 The samples are one Fibonacci lattice in the lobe's frame, shared by every
 texel (no noise; what remains is a smooth bias, measured against
-prefilter.brute_force in docs/prefilter/README.md). On studio.exr it was a
+prefilter.brute_force in studies/prefilter-speed/README.md). On studio.exr it was a
 third to a half more accurate than a Hammersley set of the same size. Level k
 takes S · 2^k samples (:func:`level_samples`). Faces under :data:`SPLIT_EDGE` texels are
 drawn f × f times larger with the samples shared out among each texel's f × f fragments
@@ -68,21 +68,21 @@ __all__ = [
     "texel_exponents",
 ]
 
-#: Importance samples per texel of level 0 (docs/prefilter/README.md: the error against the
+#: Importance samples per texel of level 0 (studies/prefilter-speed/README.md: the error against the
 #: sample count); level k takes :func:`level_samples` of it.
 DEFAULT_SAMPLES = 256
 #: Most samples per texel at any level (the sample table's width, within every GL's texture limit).
 MAX_SAMPLES = 16384
 #: Added to every FIS level. Křivánek and Colbert add 1, trading aliasing for blur; with one
 #: lattice for every texel there is no noise to hide, and on studio.exr 0 halved the error of
-#: +1 at 256 samples, while −1 was worse again (docs/prefilter/README.md).
+#: +1 at 256 samples, while −1 was worse again (studies/prefilter-speed/README.md).
 FIS_BIAS = 0.0
 _SHADER = "prefilter/lobe_chain.glsl"
 #: A level whose face is smaller is drawn split (:func:`split_factor`), so that the rasteriser
 #: (llvmpipe: 64 × 64-pixel tiles, one thread each) has several tiles to share out and each
 #: fragment a shorter loop. Measured on llvmpipe, 8 levels from 128²: levels 1–7 drew in
 #: 0.4 s instead of 0.8 s; larger edges drew faster still but read back and summed (m f)²
-#: texels a face, and the chain came out slower (docs/prefilter/README.md).
+#: texels a face, and the chain came out slower (studies/prefilter-speed/README.md).
 SPLIT_EDGE = 128
 
 
@@ -178,7 +178,7 @@ def split_factor(face: int, count: int) -> int:
     Every fragment of a texel's f × f block sums every f²-th of its samples (the same
     samples, summed in another order: the result is the unsplit one to float rounding), so
     a small level is as many fragments as a large one: unsplit, a 1² face is one fragment on
-    one llvmpipe thread, 20 times slower a sample than level 0 (docs/prefilter/README.md).
+    one llvmpipe thread, 20 times slower a sample than level 0 (studies/prefilter-speed/README.md).
     """
     f = max(1, SPLIT_EDGE // max(1, face))
     while f > 1 and f * f > count:

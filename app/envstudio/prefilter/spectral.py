@@ -48,7 +48,7 @@ falls as N^−½ with the lobe's width (R and m_max grow as N^½, the rows withi
 N^−½), then the interpolation, linear in the target texels. The per-level tables
 (:func:`plan`: ĝ for every row pair) depend on the source's shape and N only and are
 cached, as a GPU program is compiled once (measured cold and warm in
-docs/prefilter/README.md).
+studies/prefilter-speed/README.md).
 """
 
 from __future__ import annotations
@@ -522,7 +522,7 @@ def _chain_faces(
     edges = [max(1, size >> k) for k in range(first_level, first_level + len(plans))]
     if threads == 1:
         return [_level(padded, before, p, n, None) for p, n in zip(plans, edges, strict=True)]
-    # Level 0 costs about as much as all the others (docs/prefilter/README.md): it runs
+    # Level 0 costs about as much as all the others (studies/prefilter-speed/README.md): it runs
     # on one thread, the rest on the others, each level's product single-threaded.
     with ThreadPoolExecutor(threads) as pool:
         futures = [

@@ -14,7 +14,7 @@ kernel from the static environment (GpuScene.static_environment) box-filtered to
 256 × 128, at :data:`FACE_SIZE`² texels per face. Irradiance is smooth, so its
 bilinear lookups stay within 0.1 % of the exact value between texels; at the
 texel centres the prefilter's threshold holds it within 0.35 % of the brute-force
-irradiance on every shipped map, the sun's included (docs/compare.md).
+irradiance on every shipped map, the sun's included (studies/compare-fairness/README.md).
 """
 
 from __future__ import annotations

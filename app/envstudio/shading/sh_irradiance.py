@@ -4,7 +4,7 @@ Seed 000 §4.1 represents the irradiance E(n) by 9 SH coefficients convolved wit
 the clamped cosine (eq. 9–12); core.sh_lights takes the brightest tiles out as
 exact cap lights first and projects the rest to order 2, 4 or 6, which brings
 the mean irradiance error on the shipped maps to at most 0.18 % with 49
-coefficients and 32 lights (the sun-robust setting, docs/kautz).
+coefficients and 32 lights (the sun-robust setting, studies/kautz-border-and-sun).
 :class:`ShIrradiance` keeps the uniform block of shaders/common/sh_irradiance.glsl
 filled for a scene's static environment (GpuScene.static_environment):
 

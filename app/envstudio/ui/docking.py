@@ -109,6 +109,12 @@ def gl_viewport(
     return left, buffer_size[1] - bottom, right - left, bottom - top
 
 
+def pixel_scale(window_size: tuple[int, int], buffer_size: tuple[int, int]) -> tuple[float, float]:
+    """Framebuffer pixels per window point (x, y); 1 along an empty side."""
+    (w, h), (bw, bh) = window_size, buffer_size
+    return (bw / w if w else 1.0, bh / h if h else 1.0)
+
+
 class DockLayout:
     """The dock space, its default layout, and the View menu.
 

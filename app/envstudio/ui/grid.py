@@ -51,8 +51,7 @@ from imgui_bundle import imgui
 from envstudio.core.metrics import MIN_SIZE, flip, psnr
 from envstudio.engine.frame import FrameRenderer
 from envstudio.engine.grid_view import Tile, tile_at
-from envstudio.engine.method import Method
-from envstudio.engine.protocols import Session
+from envstudio.engine.method import Method, Session
 from envstudio.engine.registry import method_class
 from envstudio.errors import UserError
 from envstudio.gpu.programs import ShaderCompileError

@@ -7,7 +7,7 @@ from collections import deque
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.engine.frame import FrameStats
+from envstudio.engine.frame_stats import FrameStats
 
 FRAME_SERIES = "frame"
 """Name of the whole-frame series (CPU time between frames)."""

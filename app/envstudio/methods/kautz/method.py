@@ -35,7 +35,7 @@ Past the paper:
 - ``lod_mode=level``: b is the mip level itself rather than a bias on the hardware's
   screen-space LOD, so the blur does not change with the image size and matches the
   b ↔ N fit of prefilter.glossiness (PSNR 12.7 → 23.6 dB against the Phong reference at
-  b = 2, docs/kautz);
+  b = 2, studies/kautz-border-and-sun);
 - ``sh_coefficients`` and ``lights``: the residual after taking the brightest tiles
   out as cap lights is projected to order 2, 4 or 6 (core.sh_lights), which brings
   the irradiance error on the shipped maps from a mean of 1.6–26 % (maximum 214 %)

@@ -73,14 +73,14 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         "--tie",
         type=float,
         help="weight μ of the coarse-to-fine MIP ties (default 1e-3; larger: coarse levels "
-        "nearer the decimated finest, steadier at small playback sizes, docs/pem)",
+        "nearer the decimated finest, steadier at small playback sizes, studies/pem-bake)",
     )
     parser.add_argument(
         "--coupling",
         type=float,
         default=0.0,
         help="coupled inference (not in seed 003): weight γ tying each view's maps to its "
-        "neighbours' (0: each view alone, as the paper; docs/pem)",
+        "neighbours' (0: each view alone, as the paper; studies/pem-bake)",
     )
     parser.add_argument(
         "--coupling-passes",
@@ -95,14 +95,14 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="glossy reflectors (not in seed 003, whose §7 leaves them open): trace with the "
         "Phong lobe of exponent N sampled at each hit, as the reference's lobe (default: "
-        "mirrors; docs/pem)",
+        "mirrors; studies/pem-bake)",
     )
     parser.add_argument(
         "--rtol",
         type=float,
         help="the MIP solves' conjugate-gradient tolerance (default 1e-6 below 128² EMs, 1e-4 "
         "from 128², where the multigrid solves; 1e-4 is about twice as fast with the same "
-        "playback to 0.08 dB, docs/pem/paper.md)",
+        "playback to 0.08 dB, studies/pem-paper-scale/README.md)",
     )
     parser.add_argument(
         "--over-passes",
@@ -110,7 +110,7 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         default=0,
         metavar="K",
         help="refit the layered model's distant and local colour through its composite K "
-        "times after seed 003's sequential fit (not in the paper; docs/pem/orbit.md); "
+        "times after seed 003's sequential fit (not in the paper; studies/pem-orbit/README.md); "
         "default 0",
     )
     parser.add_argument(
@@ -119,7 +119,7 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         default=1,
         metavar="F",
         help="fit every level to the view at R, R/2, ..., R/2^(F-1) too, so that a smaller "
-        "playback reads fitted levels (not in the paper; docs/pem/orbit.md); default 1",
+        "playback reads fitted levels (not in the paper; studies/pem-orbit/README.md); default 1",
     )
     parser.add_argument(
         "--zstd-level",
@@ -127,7 +127,7 @@ def add_bake_arguments(parser: argparse.ArgumentParser) -> None:
         default=19,
         metavar="L",
         help="the file's zstd level, 1-22 (default 19: small, slow; 3 writes 5%% more in a "
-        "26th of the time, for big bakes; docs/pem/paper.md)",
+        "26th of the time, for big bakes; studies/pem-paper-scale/README.md)",
     )
     parser.add_argument(
         "--no-ptm",
@@ -252,7 +252,7 @@ def _coverage_warning(space: ViewSpace, camera: OrbitCamera) -> str:
         f"envstudio: warning: the views cover azimuth {az.min():g}°…{az.max():g}° and elevation "
         f"{el.min():g}°…{el.max():g}°: {len(outside)} of {len(cameras)} orbit cameras "
         f"({ORBIT_STEP[0]:g}° × {ORBIT_STEP[1]:g}° apart) lie outside and play the nearest edge "
-        "views; pem's coverage=orbit plays every one (docs/pem/orbit.md)"
+        "views; pem's coverage=orbit plays every one (studies/pem-orbit/README.md)"
     )
 
 

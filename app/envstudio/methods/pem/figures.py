@@ -17,7 +17,7 @@ def _prepared(request: FigureRequest) -> Method:
     if method.values["coverage"] == "orbit":
         raise ParameterError(
             "pem figures show a .pem file's views: set coverage=file (the full orbit's "
-            "numbers: docs/pem/orbit.md)"
+            "numbers: studies/pem-orbit/README.md)"
         )
     method.values["coverage"] = "file"
     method.prepare(request.session.gpu_scene)

@@ -33,7 +33,7 @@ REFERENCE_PERCENTILE = 80.0
 #: analytic lobe at 1024 samples per pixel and batch). A traced sample runs a
 #: few hundred iterations (the cap's rows, the CDF searches, the Sobol bits, the
 #: BVH walk), so on software renderers a pixel draws at most this many per draw,
-#: and a larger batch is drawn in chunks (methods/reference/method.py).
+#: and a larger batch is drawn in chunks (methods/reference/estimator.py).
 SOFTWARE_SAMPLES_PER_BATCH = 32
 
 

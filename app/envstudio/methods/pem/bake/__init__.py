@@ -14,7 +14,7 @@ triangles; models the per-view models (layered distant + local RGBA, sphere at
 infinity, static EM) and their predicted playback; pem_file the ``.pem`` file
 (version 2: zstd half floats, levels as residuals); bake the resumable job of
 one work unit per view on a process pool or Dask; numbers the issue's numbers
-(docs/pem/README.md).
+(studies/pem-bake/README.md).
 """
 
 from envstudio.methods.pem.bake.bake import BakeReport, ViewTask, bake_view, run_bake

@@ -98,7 +98,8 @@ SOLVE_RTOL = 1e-6
 
 #: The default tolerance where the solve is the multigrid one (from ``MULTIGRID_SIZE``² EMs,
 #: whose parts were never those of before): at 256² EMs its playback is 10⁻⁶'s to 0.015 dB
-#: at the sample views and midway between them, in half the inference (docs/pem/paper.md).
+#: at the sample views and midway between them, in half the inference
+#: (studies/pem-paper-scale/README.md).
 MULTIGRID_RTOL = 1e-4
 
 #: Seconds a ``--scheduler ADDRESS`` has to answer before the bake gives up.
@@ -191,7 +192,7 @@ class ViewTask:
         0: mirrors, as bakes before the option.
     rtol : float
         The conjugate gradient's relative residual in every MIP solve
-        (default :func:`default_rtol`; docs/pem/paper.md measures
+        (default :func:`default_rtol`; studies/pem-paper-scale/README.md measures
         10⁻⁴: at 64² EMs (Jacobi) twice as fast with the same playback to 0.08 dB at the
         orbit's cameras, at 256² (multigrid) 22 s against 46 s a view; 10⁻³ loses up to
         1.6 dB between views).
@@ -769,7 +770,7 @@ def run_bake(
     zstd_level
         The file's compression (:func:`~.pem_file.save_pem`): 19, small and slow (the
         100-view 256² bake: 13 min of its 34); 3 writes 5 % more in a 26th of the time
-        (docs/pem/paper.md).
+        (studies/pem-paper-scale/README.md).
 
     Returns
     -------

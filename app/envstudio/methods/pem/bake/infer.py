@@ -54,7 +54,7 @@ active set (:func:`bounded_cg`). From 128² EMs (:data:`MULTIGRID_SIZE`) its CG 
 preconditioned by a multigrid V-cycle (:class:`ChainMultigrid`, not in seed 003)
 instead of Jacobi: the regulariser is a Laplacian, whose fill of the texels no
 pixel reaches takes Jacobi-CG O(n) iterations (600–1500 at 256², 30–160 with
-the cycle; docs/pem/paper.md). :func:`infer_mip` wraps it for one layer;
+the cycle; studies/pem-paper-scale/README.md). :func:`infer_mip` wraps it for one layer;
 :func:`infer_local_over` fits the local layer's premultiplied RGBA through the
 "over" with the inferred distant layer.
 
@@ -732,8 +732,8 @@ def mip_regulariser(size: int, levels: int, smoothness: float, tie: float) -> sp
 
 
 #: The finest face edge from which :func:`solve_mip` preconditions with :class:`ChainMultigrid`
-#: (docs/pem/paper.md: at 64² its cycle costs more than the iterations it saves); below it,
-#: Jacobi, the bits of before.
+#: (studies/pem-paper-scale/README.md: at 64² its cycle costs more than the iterations it
+#: saves); below it, Jacobi, the bits of before.
 MULTIGRID_SIZE = 128
 
 

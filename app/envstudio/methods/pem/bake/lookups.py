@@ -82,7 +82,7 @@ REQUIRED = ("distant", "local", "sphere")
 CHANNELS = {"distant": 3, "local": 4, "sphere": 3, "ptm": 3}
 #: Level bias of a bake's lookups (``PixelLookups.matrix``; the ``.pem`` stores it as
 #: ``parameters["lod_bias"]`` and the playback adds it to the level before the
-#: clamp). −2 fits ``room`` best at 128² and 256² (docs/pem/README.md): with every
+#: clamp). −2 fits ``room`` best at 128² and 256² (studies/pem-bake/README.md): with every
 #: level inferred, sampling two levels finer than one texel per pixel lets the solve
 #: keep detail the trilinear filter of the unbiased level blurs.
 LOD_BIAS = -2.0

@@ -57,7 +57,7 @@ __all__ = [
 
 #: (azimuth, elevation) spacing of the orbit's views in degrees, chosen by measurement:
 #: the coarsest whose playback midway between samples is within 1 dB of the 2× denser
-#: grid's (docs/pem/orbit.md).
+#: grid's (studies/pem-orbit/README.md).
 ORBIT_STEP = (5.0, 5.0)
 
 #: The orbit's bake parameters: those of the shipped arc bake (assets/pem/room.pem), the
@@ -65,7 +65,7 @@ ORBIT_STEP = (5.0, 5.0)
 #: tolerance 10⁻⁴ (twice as fast as the default 10⁻⁶ at 64² EMs, and the same playback to
 #: 0.08 dB at 24 random cameras; 10⁻³, faster still, lost up to 1.6 dB near the floor), and
 #: the layered maps refitted through their composite twice (bake/over.py, not in seed 003:
-#: without it the sphere at infinity leads at grazing views; docs/pem/orbit.md).
+#: without it the sphere at infinity leads at grazing views; studies/pem-orbit/README.md).
 ORBIT_BAKE = {
     "size": 256,
     "samples": 4,
@@ -78,9 +78,9 @@ ORBIT_BAKE = {
 
 #: The full orbit's coupling weight γ (pem's ``orbit_coupling``; not in seed 003): each
 #: view inferred again drawn towards its four neighbours' maps. Part 4's trade on the arc
-#: (docs/pem/README.md); on the orbit the layered PEM then leads the sphere at infinity and
+#: (studies/pem-bake/README.md); on the orbit the layered PEM then leads the sphere at infinity and
 #: the static EM at all 24 random cameras, not 23, for 0.26 dB at the median
-#: (docs/pem/orbit.md).
+#: (studies/pem-orbit/README.md).
 ORBIT_COUPLING = 0.1
 
 #: The parameters that couple an orbit's views (without them: the orbit of before).
@@ -94,7 +94,7 @@ COUPLED_CHUNK = 4
 VIEW_ZSTD_LEVEL = 3
 
 #: Default cap of the orbits' cache, GB (``$ENVSTUDIO_ORBIT_CACHE_GB`` overrides): a whole
-#: 5° orbit of ``room`` is about 1.3 GB of views above the floor (docs/pem/orbit.md).
+#: 5° orbit of ``room`` is about 1.3 GB of views above the floor (studies/pem-orbit/README.md).
 ORBIT_CACHE_GB = 4.0
 
 

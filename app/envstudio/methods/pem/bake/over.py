@@ -10,7 +10,7 @@ At grazing views (along the floor, from above) many pixels whose reflected rays
 differ reach the same ellipsoid texels, so the local layer cannot hold what its
 α edges and self-reflections need, and the distant layer, fitted to D alone,
 does not help: the layered playback falls behind the sphere at infinity
-(docs/pem/orbit.md). With ``passes`` K ≥ 1 this module then minimises the
+(studies/pem-orbit/README.md). With ``passes`` K ≥ 1 this module then minimises the
 composite's own error by block coordinate descent, α held at its fit:
 
 1. x_D ← argmin ||diag(1 − α_L) A_D x_D − (I − rgb_L)||² + R(x_D), where on the
