@@ -15,10 +15,6 @@ from envstudio.commands.common import (
 from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
 
-#: Samples per axis ``--ssaa`` may ask for, and the largest supersampled frame edge.
-MAX_SSAA = 8
-MAX_SSAA_EDGE = 8192
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Methods, scene, camera, size, parameters, stopping, timing, output, cache."""
@@ -75,7 +71,12 @@ def run(args: argparse.Namespace) -> int:
     from envstudio.core.metrics import MIN_SIZE
     from envstudio.io.atomic import check_output_folder
     from envstudio.io.scene_setup import parse_camera, parse_size
-    from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
+    from envstudio.measure.compare import (
+        check_ssaa,
+        method_classes,
+        plan_parameters,
+        run_comparison,
+    )
     from envstudio.measure.report import format_table, write_report
 
     size = parse_size(args.size)
@@ -88,11 +89,7 @@ def run(args: argparse.Namespace) -> int:
     if args.frames < 1 or args.warmup < 0:
         raise ParameterError("--frames must be >= 1 and --warmup >= 0")
     time_limit = parse_time_limit(args.time_limit)
-    if not 1 <= args.ssaa <= MAX_SSAA or args.ssaa * max(size) > MAX_SSAA_EDGE:
-        raise ParameterError(
-            f"--ssaa {args.ssaa}: expected an integer in 1..{MAX_SSAA} with "
-            f"{args.ssaa} x {max(size)} <= {MAX_SSAA_EDGE} pixels"
-        )
+    check_ssaa(args.ssaa, size, "--ssaa")
     out = check_output_folder(args.out)
     if args.camera:
         parse_camera(args.camera)

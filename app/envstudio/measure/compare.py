@@ -111,6 +111,38 @@ class ParameterPlan:
     display: dict[str, object]
 
 
+#: Samples per axis ``ssaa`` may ask for, and the largest supersampled frame edge.
+MAX_SSAA = 8
+MAX_SSAA_EDGE = 8192
+
+
+def check_ssaa(ssaa: object, size: tuple[int, int], name: str = "ssaa") -> None:
+    """Refuse a supersampling that compare cannot render (compare, atlas and the API alike).
+
+    Parameters
+    ----------
+    ssaa
+        Samples per pixel per axis, as given.
+    size : (int, int)
+        The frame's width and height, pixels.
+    name
+        How the caller calls it (``--ssaa`` on the command line).
+
+    Raises
+    ------
+    ParameterError
+        Unless ``ssaa`` is an integer in 1..:data:`MAX_SSAA` with ``ssaa`` × the larger
+        edge of ``size`` at most :data:`MAX_SSAA_EDGE` pixels.
+    """
+    edge = max(size)
+    is_int = isinstance(ssaa, int) and not isinstance(ssaa, bool)
+    if not is_int or not 1 <= ssaa <= MAX_SSAA or ssaa * edge > MAX_SSAA_EDGE:
+        raise ParameterError(
+            f"{name} {ssaa!r}: expected an integer in 1..{MAX_SSAA} with "
+            f"{name} x {edge} <= {MAX_SSAA_EDGE} pixels"
+        )
+
+
 @dataclass
 class ReferenceRun:
     """The converged (or budget-limited) reference.
