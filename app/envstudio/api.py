@@ -20,27 +20,29 @@ one-line messages. In Jupyter, :func:`show` displays an image inline and a
 from __future__ import annotations
 
 import base64
+import copy
 import html
 import io
-import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
+from envstudio import api_arguments as check
 from envstudio.core.images import to_ldr
 from envstudio.engine.session import RenderSession, material_values, render_until_finished
 from envstudio.errors import ParameterError
-from envstudio.io.scene_setup import build_scene, parse_camera
+from envstudio.io.scene_setup import build_scene
+from envstudio.measure.time_limit import check_time_limit
 from envstudio.scene.graph import Scene
 
 __all__ = ["Image", "Report", "compare", "display", "load_scene", "render", "show"]
 
 _SESSION: RenderSession | None = None
 _CONTEXT = None
-_CAMERA: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the session scene's own camera
 
 
 def load_scene(
@@ -50,38 +52,56 @@ def load_scene(
     max_env_width: int | None = None,
 ) -> Scene:
     """A scene: a shipped name or a ``.toml`` file (default ``studio``), its environment
-    and/or reflector replaced by files, as ``--scene``, ``--env`` and ``--mesh`` do."""
+    and/or reflector replaced by files, as ``--scene``, ``--env`` and ``--mesh`` do.
+
+    Raises
+    ------
+    InputFileError
+        A file that is missing, unreadable or not what was expected.
+    ParameterError
+        An argument of the wrong type, or a ``max_env_width`` under 8 (as
+        ``--max-env-width``).
+    """
+    check.path(name_or_path, "name_or_path", "a shipped scene name or a .toml file")
+    check.path(env, "env", "an .exr or .hdr file")
+    check.path(mesh, "mesh", "a mesh file (OBJ, PLY, STL, OFF, GLB)")
+    if max_env_width is not None:
+        check.integer(max_env_width, "max_env_width")
     return build_scene(name_or_path, env, mesh, max_env_width)
 
 
-def _session(scene: Scene) -> RenderSession:
-    """The process's session of ``scene``: one context, the scene kept while it is the same."""
-    global _SESSION, _CONTEXT, _CAMERA
-    if _SESSION is not None and _SESSION.scene is scene:
-        camera = _SESSION.camera
-        camera.azimuth, camera.elevation, camera.distance = _CAMERA
-        return _SESSION
+@contextmanager
+def _session(scene: Scene) -> Iterator[RenderSession]:
+    """The process's session of ``scene``, its context current, its camera the scene's own.
+
+    One context per process; the scene on the GPU is kept while the same scene is rendered
+    again. A call that fails inside leaves no session behind (whatever it half-built is
+    freed), so the next call starts from a fresh one.
+    """
+    global _SESSION, _CONTEXT
     if _CONTEXT is None:
         from envstudio.gpu.context import create_headless_context
 
         _CONTEXT = create_headless_context()
-    with _CONTEXT:  # current while the old scene is freed and the new one uploaded
-        if _SESSION is not None:
-            _SESSION.release()
-        _SESSION = RenderSession(scene, ctx=_CONTEXT)
-    camera = _SESSION.camera
-    _CAMERA = (camera.azimuth, camera.elevation, camera.distance)
-    return _SESSION
+    with _CONTEXT:  # current again: another context (a CLI call, a bake) may have taken over
+        try:
+            if _SESSION is None or _SESSION.scene is not scene:
+                _release_session()
+                _SESSION = RenderSession(scene, ctx=_CONTEXT)
+            _SESSION.camera = copy.deepcopy(scene.camera)  # placed per call, the scene's kept
+            yield _SESSION
+        except BaseException:
+            with suppress(Exception):  # a half-built session may not free cleanly; the error
+                _release_session()  # that broke it is the one to report
+            raise
 
 
-def _size(size: Sequence[int]) -> tuple[int, int]:
-    try:
-        width, height = (int(v) for v in size)
-    except (TypeError, ValueError):
-        width = height = 0
-    if not (1 <= width <= 16384 and 1 <= height <= 16384):
-        raise ParameterError(f"size {size!r}: expected (width, height), each 1..16384")
-    return width, height
+def _release_session() -> None:
+    """Forget the process's session, if any, and free it (its context current)."""
+    global _SESSION
+    session, _SESSION = _SESSION, None
+    if session is not None:
+        session.release()
 
 
 def render(
@@ -101,60 +121,57 @@ def render(
     Raises
     ------
     ParameterError
-        An unknown method or parameter, a value out of range, a bad size or camera.
+        An unknown method or parameter, a value out of range or of the wrong type, a bad
+        scene, size, camera or time limit.
     """
-    width, height = _size(size)
-    session = _session(scene)
-    with session.ctx:  # current again: another context (a CLI call, a bake) may have taken over
-        return _render(session, scene, method, (width, height), camera, time_limit, parameters)
-
-
-def _render(session, scene, method, size, camera, time_limit, parameters):
-    """:func:`render` on ``session``, its context current."""
-    instance = session.method(method)
-    instance.values.update({p.name: p.default for p in instance.parameters})
-    instance.values.update(material_values(scene), ignore_unknown=True)  # as a fresh session
-    session.renderer.display.update({p.name: p.default for p in session.renderer.display})
-    session.apply(instance, [f"{k}={_text(v)}" for k, v in parameters.items()])
+    check.scene(scene)
+    cls = check.method(method)
+    size = check.size(size)
+    camera = check.camera(camera)
+    assignments = check.method_assignments(cls, parameters)
     if time_limit is not None:
-        if "time_limit" not in instance.values:
+        time_limit = check_time_limit(time_limit, "time_limit")
+        if "time_limit" not in {p.name for p in cls.parameters}:
             raise ParameterError(
                 f"time_limit: method {method} draws its image in one frame "
                 "(only progressive methods, such as reference, take a time limit)"
             )
-        instance.values["time_limit"] = time_limit
-    _place(session, camera)
-    render_until_finished(session, instance, size)
-    return session.read_hdr()
+    with _session(scene) as session:
+        instance = session.method(method)
+        instance.values.update({p.name: p.default for p in instance.parameters})
+        instance.values.update(material_values(scene), ignore_unknown=True)  # as a fresh one
+        session.renderer.display.update({p.name: p.default for p in session.renderer.display})
+        session.apply(instance, assignments)
+        if time_limit is not None:
+            instance.values["time_limit"] = time_limit
+        _place(session, camera)
+        render_until_finished(session, instance, size)
+        return session.read_hdr()
 
 
-def _place(session: RenderSession, camera: Sequence[float] | None) -> None:
+def _place(session: RenderSession, camera: tuple[float, float, float] | None) -> None:
     """Put the camera at (azimuth, elevation, distance), degrees and scene units (None: the
     scene's own)."""
     if camera is not None:
-        azimuth, elevation, distance = parse_camera(",".join(map(str, camera)))
-        session.camera.azimuth, session.camera.elevation = azimuth, elevation
-        session.camera.distance = distance
-
-
-def _text(value: object) -> str:
-    """A parameter value as ``--param`` takes it (a colour as r,g,b)."""
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return ",".join(str(float(v)) for v in value)
-    return str(value).lower() if isinstance(value, bool) else str(value)
+        session.camera.azimuth, session.camera.elevation, session.camera.distance = camera
 
 
 def display(
     image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces"
 ) -> npt.NDArray[np.uint8]:
     """(h, w, 3) uint8 sRGB of linear ``image``, as the PNG (exposure in stops, then the tone
-    map ``none``, ``reinhard`` or ``aces``)."""
-    if tonemap not in ("none", "reinhard", "aces") or not math.isfinite(exposure):
-        raise ParameterError(
-            f"tonemap={tonemap!r}, exposure={exposure!r}: expected none, reinhard or aces "
-            "and a finite exposure"
-        )
-    return to_ldr(image, exposure, tonemap)
+    map ``none``, ``reinhard`` or ``aces``).
+
+    Raises
+    ------
+    ParameterError
+        ``image`` not (h, w, 3) finite numbers, or ``exposure`` and ``tonemap`` outside the
+        display's declarations (as ``--param exposure=...``).
+    """
+    pixels = check.linear_image(image)
+    exposure = check.display_setting("exposure", exposure)
+    tonemap = check.display_setting("tonemap", tonemap)
+    return to_ldr(pixels, exposure, tonemap)
 
 
 @dataclass
@@ -172,9 +189,16 @@ class Image:
 
 
 def show(image: npt.ArrayLike, exposure: float = 0.0, tonemap: str = "aces") -> Image:
-    """``image`` for inline display: linear float arrays through :func:`display`, uint8 as is."""
-    pixels = np.asarray(image)
-    return Image(pixels if pixels.dtype == np.uint8 else display(pixels, exposure, tonemap))
+    """``image`` for inline display: (h, w, 3) linear arrays through :func:`display`,
+    (h, w, 3) or (h, w, 4) uint8 sRGB as is.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`display`, or a uint8 array of another shape.
+    """
+    pixels = check.srgb_image(image)
+    return Image(display(image, exposure, tonemap) if pixels is None else pixels)
 
 
 @dataclass
@@ -224,27 +248,44 @@ def compare(
 ) -> Report:
     """``envstudio compare`` in-process: each method against the reference of its model.
 
-    ``parameters`` go to every method that declares them (the reference's included) and to
-    the display, as ``--param`` does.
+    ``methods`` is a list of names (or one string of comma-separated names, as
+    ``--methods``). ``parameters`` go to every method that declares them (the reference's
+    included) and to the display, as ``--param`` does.
+
+    Raises
+    ------
+    ParameterError
+        An unknown method or parameter, a value out of range or of the wrong type, a bad
+        scene, size, camera, time limit, ``ssaa``, ``frames`` or ``cache``; a camera that
+        sees no reflector.
     """
     from envstudio.core.metrics import MIN_SIZE
-    from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
+    from envstudio.measure.compare import (
+        check_ssaa,
+        method_classes,
+        plan_parameters,
+        run_comparison,
+    )
     from envstudio.measure.report import to_json
 
-    width, height = _size(size)
-    if min(width, height) < MIN_SIZE:
+    check.scene(scene)
+    names = check.methods(methods)
+    size = check.size(size)
+    if min(size) < MIN_SIZE:
         raise ParameterError(f"size {size!r}: compare needs at least {MIN_SIZE}x{MIN_SIZE}")
-    names = list(methods)
-    plan = plan_parameters(
-        method_classes(names), [f"{k}={_text(v)}" for k, v in parameters.items()]
-    )
-    session = _session(scene)
-    _place(session, camera)
-    with session.ctx:
+    camera = check.camera(camera)
+    if time_limit is not None:
+        time_limit = check_time_limit(time_limit, "time_limit")
+    check_ssaa(ssaa, size)
+    frames = check.integer(frames, "frames", 1)
+    cache = check.flag(cache, "cache")
+    plan = plan_parameters(method_classes(names), check.assignments(parameters))
+    with _session(scene) as session:
+        _place(session, camera)
         comparison = run_comparison(
             session,
             names,
-            (width, height),
+            size,
             plan,
             frames=frames,
             warmup=1,

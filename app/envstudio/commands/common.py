@@ -4,9 +4,6 @@ a session of the scene the options name, rendering until a method is finished.""
 from __future__ import annotations
 
 import argparse
-import math
-
-from envstudio.errors import ParameterError
 
 
 def add_scene_options(parser: argparse.ArgumentParser) -> None:
@@ -61,22 +58,12 @@ def parse_time_limit(text: str | None) -> float | None:
     Raises
     ------
     ParameterError
-        Unless a finite number > 0 and at most the ground truth's ``time_limit`` maximum.
+        Unless a finite number > 0 and at most the ground truth's ``time_limit`` maximum
+        (:func:`envstudio.measure.time_limit.check_time_limit`).
     """
-    if text is None:
-        return None
-    from envstudio.measure.ground_truth import MAX_TIME_LIMIT_S
+    from envstudio.measure.time_limit import check_time_limit
 
-    try:
-        seconds = float(text)
-    except ValueError:
-        seconds = math.nan
-    if not 0 < seconds <= MAX_TIME_LIMIT_S:
-        raise ParameterError(
-            f"--time-limit {text}: expected a positive number of seconds "
-            f"(at most {MAX_TIME_LIMIT_S:g})"
-        )
-    return seconds
+    return None if text is None else check_time_limit(text, "--time-limit")
 
 
 def session_from_args(args: argparse.Namespace, scene=None):

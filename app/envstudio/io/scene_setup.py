@@ -1,4 +1,5 @@
-"""Building the scene a command asked for: ``--scene``, ``--env``, ``--mesh``, ``--camera``."""
+"""Building the scene a command asked for: ``--scene``, ``--env``, ``--mesh``, ``--camera``,
+and the frame ``--size``, checked alike for the command line and the API."""
 
 from __future__ import annotations
 
@@ -51,15 +52,37 @@ def replace_reflector(scene: Scene, mesh) -> list[Node]:
     return [node, *scene.local_objects()]
 
 
+#: The largest frame edge, pixels (``--size`` and the API's ``size``).
+MAX_EDGE = 16384
+
+
 def parse_size(text: str) -> tuple[int, int]:
     """``"640x480"`` → (640, 480); raises ParameterError."""
     width, sep, height = text.lower().partition("x")
     try:
-        size = (int(width), int(height))
+        size = (int(width), int(height)) if sep else (0, 0)
     except ValueError:
         size = (0, 0)
-    if not sep or min(size) < 1 or max(size) > 16384:
-        raise ParameterError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480")
+    return check_size(size, f"--size {text!r}", "WIDTHxHEIGHT (e.g. 640x480)")
+
+
+def check_size(size: tuple[int, int], name: str, form: str) -> tuple[int, int]:
+    """``size`` (width, height) when each edge is 1..:data:`MAX_EDGE` pixels.
+
+    Parameters
+    ----------
+    size
+        Width and height as integers.
+    name, form
+        How the caller calls it and writes it (``--size '0x8'``, ``WIDTHxHEIGHT``).
+
+    Raises
+    ------
+    ParameterError
+        Unless both edges are in range.
+    """
+    if not all(1 <= edge <= MAX_EDGE for edge in size):
+        raise ParameterError(f"{name}: expected {form}, each 1..{MAX_EDGE}")
     return size
 
 
@@ -70,12 +93,30 @@ def parse_camera(text: str) -> tuple[float, float, float]:
         az, el, dist = (float(p) for p in parts)
     except ValueError:
         raise ParameterError(f"--camera {text!r}: expected AZIMUTH,ELEVATION,DISTANCE") from None
+    return check_camera((az, el, dist), f"--camera {text!r}")
+
+
+def check_camera(camera: tuple[float, float, float], name: str) -> tuple[float, float, float]:
+    """``camera`` (azimuth, elevation, distance) when it places an orbit camera.
+
+    Parameters
+    ----------
+    camera
+        Azimuth and elevation in degrees, distance in scene units.
+    name
+        How the caller calls it (``--camera '0,100,3'``).
+
+    Raises
+    ------
+    ParameterError
+        Unless the azimuth is finite, the elevation in [-90, 90] and the distance in (0, 1e30).
+    """
+    az, el, dist = camera
     if not math.isfinite(az) or not -90.0 <= el <= 90.0 or not 0.0 < dist < 1e30:
         raise ParameterError(
-            f"--camera {text!r}: expected a finite azimuth, elevation in [-90, 90] and a "
-            "finite distance > 0"
+            f"{name}: expected a finite azimuth, elevation in [-90, 90] and a finite distance > 0"
         )
-    return az, el, dist
+    return camera
 
 
 def subdivide_reflectors(scene: Scene, min_triangles: int) -> None:
