@@ -168,3 +168,21 @@ def test_a_method_that_crashes_is_marked_and_the_rest_is_measured(tmp_path, monk
     rows = {r["method"]: r for r in result.rows}
     assert rows["kautz"]["error"] == "RuntimeError: boom" and result.failed == 1
     assert rows["mirror"]["error"] is None and rows["mirror"]["scene_error"] > 0
+
+
+def test_a_corrupt_cell_is_one_note_and_measured_again_with_its_images(tmp_path, capsys):
+    tiny = ["--methods", "mirror", "--envs", "studio", "--meshes", "sphere", "--exponents", "10"]
+    tiny += ["--size", "16x16", "--ssaa", "1", "--time-limit", "1", "--out", str(tmp_path)]
+    assert main(["atlas", *tiny]) == 0
+    cell = next((tmp_path / "cells").glob("*.json"))
+    cell.write_text(cell.read_text()[:20])
+    for png in cell.with_suffix("").glob("*.png"):
+        png.unlink()
+    capsys.readouterr()
+    assert main(["atlas", *tiny]) == 0
+    captured = capsys.readouterr()
+    assert "(1 measured now)" in captured.out
+    notes = [line for line in captured.err.splitlines() if "note:" in line]
+    assert len(notes) == 1 and (cell.parent / f"{cell.name}.corrupt").is_file()
+    row = json.loads((tmp_path / "atlas.json").read_text())["cells"][0]
+    assert row["error"] is None and (tmp_path / "cells" / row["image"]).is_file()

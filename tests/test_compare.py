@@ -523,3 +523,14 @@ def test_on_a_convex_sphere_the_scene_only_error_is_noise_and_approximation_is_s
     approximation = mirror["approximation"]["median_relative_error"]
     assert abs(approximation - mirror["scene_error"]) < 2.0 * noise
     assert "| mirror |" in (out / "compare.md").read_text()
+
+
+def test_pem_without_a_bake_says_so_with_no_numbers_as_the_atlas(small_scene, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert compare(small_scene, out, "--methods", "pem", "--param", "max_samples=64") == 0
+    captured = capsys.readouterr()
+    pem = json.loads((out / "compare.json").read_text())["methods"]["pem"]
+    assert pem["missing_input"].startswith("needs a bake") and not pem["reliable"]
+    assert pem["psnr_db"] is None and pem["scene_error"] is None
+    warning = [line for line in captured.err.splitlines() if "unreliable" in line]
+    assert warning == [f"envstudio: warning: metrics unreliable: pem: {pem['missing_input']}"]

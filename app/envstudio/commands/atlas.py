@@ -8,6 +8,7 @@ import sys
 from envstudio.commands.common import add_param_option
 from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
+from envstudio.measure.compare import MAX_SSAA
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -26,18 +27,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--exponents", default="10,100,1000", help="Phong exponents N")
     parser.add_argument("--kd", default="0", help="diffuse weights k_d (default 0)")
     parser.add_argument("--size", default="96x96", help="WIDTHxHEIGHT (default 96x96)")
-    parser.add_argument(
-        "--cameras", type=int, default=1, help="K cameras spread in azimuth (default 1)"
-    )
+    parser.add_argument("--cameras", default="1", help="K cameras spread in azimuth (default 1)")
     parser.add_argument(
         "--time-limit",
-        type=float,
-        default=60.0,
+        default="60",
         metavar="SECONDS",
         help="the reference's time limit per scene (default 60)",
     )
     parser.add_argument(
-        "--ssaa", type=int, default=4, help="samples per pixel per axis, as compare (default 4)"
+        "--ssaa",
+        default="4",
+        help=f"samples per pixel per axis, 1..{MAX_SSAA} as compare (default 4)",
     )
     add_param_option(parser)
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
@@ -56,37 +56,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Measure the missing cells, write the page; exit 1 if any cell failed."""
-    from envstudio.engine.registry import available_methods, ground_truth_class
+    """Check the whole grid, measure the missing cells, write the page; exit 1 if a cell failed."""
     from envstudio.io.atomic import check_output_folder
-    from envstudio.io.scene_file import shipped_environments
-    from envstudio.io.scene_setup import parse_size
-    from envstudio.measure.atlas.grid import AtlasGrid
     from envstudio.measure.atlas.run import run_atlas
 
     if args.jobs < 1:
         raise ParameterError(f"--jobs {args.jobs}: expected at least 1")
-    if not args.time_limit > 0:
-        raise ParameterError(f"--time-limit {args.time_limit}: expected a positive number")
-    truth = ground_truth_class().name
-    methods = _names(args.methods, "--methods") or [n for n in available_methods() if n != truth]
-    grid = AtlasGrid(
-        methods=tuple(methods),
-        envs=tuple(_names(args.envs, "--envs") or shipped_environments()),
-        meshes=tuple(_names(args.meshes, "--meshes")),
-        exponents=tuple(_numbers(args.exponents, "--exponents")),
-        kds=tuple(_numbers(args.kd, "--kd")),
-        size=parse_size(args.size),
-        cameras=args.cameras,
-        time_limit=args.time_limit,
-        ssaa=args.ssaa,
-        params=tuple(args.param),
-    )
-    from envstudio.measure.compare import method_classes, plan_parameters
-
-    plan_parameters(method_classes(list(grid.methods)), grid.params)  # one line if bad
+    grid = grid_from_args(args)
+    if not args.out.strip():
+        raise ParameterError(f"--out {args.out!r}: expected a folder name")
     out = check_output_folder(args.out)
     result = run_atlas(grid, out, args.jobs, args.scheduler, args.force, sys.stderr.isatty())
+    for note in result.notes:
+        print(f"envstudio: note: {note}", file=sys.stderr)
     print(f"atlas: {len(result.rows)} cells ({result.measured} measured now) in {out}/index.html")
     if result.failed:
         failed = [r for r in result.rows if r.get("error")]
@@ -99,10 +81,48 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def grid_from_args(args: argparse.Namespace):
+    """The grid of the command line, checked whole before anything is written.
+
+    Returns
+    -------
+    AtlasGrid
+        Finite values in range, every environment, mesh, method and parameter loaded
+        (measure.atlas.validate.check_grid).
+
+    Raises
+    ------
+    ParameterError, InputFileError
+        The first bad option, in one line.
+    """
+    from envstudio.engine.registry import available_methods, ground_truth_class
+    from envstudio.io.scene_file import shipped_environments
+    from envstudio.io.scene_setup import parse_size
+    from envstudio.measure.atlas.grid import AtlasGrid
+    from envstudio.measure.atlas.validate import check_grid
+
+    truth = ground_truth_class().name
+    methods = _names(args.methods, "--methods") or [n for n in available_methods() if n != truth]
+    grid = AtlasGrid(
+        methods=tuple(methods),
+        envs=tuple(_names(args.envs, "--envs") or shipped_environments()),
+        meshes=tuple(_names(args.meshes, "--meshes")),
+        exponents=tuple(_numbers(args.exponents, "--exponents")),
+        kds=tuple(_numbers(args.kd, "--kd")),
+        size=parse_size(args.size),
+        cameras=_number(args.cameras, "--cameras", int),
+        time_limit=_number(args.time_limit, "--time-limit", float),
+        ssaa=_number(args.ssaa, "--ssaa", int),
+        params=tuple(args.param),
+    )
+    check_grid(grid)
+    return grid
+
+
 def _names(text: str | None, option: str) -> list[str]:
     if text is None:
         return []
-    names = [n.strip() for n in text.split(",") if n.strip()]
+    names = list(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
     if not names:
         raise ParameterError(f"{option} {text!r}: expected comma-separated names")
     return names
@@ -110,10 +130,17 @@ def _names(text: str | None, option: str) -> list[str]:
 
 def _numbers(text: str, option: str) -> list[float]:
     try:
-        values = [float(v) for v in text.split(",")]
+        values = list(dict.fromkeys(float(v) for v in text.split(",")))
     except ValueError:
-        raise ParameterError(f"{option} {text}: expected comma-separated numbers") from None
+        raise ParameterError(f"{option} {text!r}: expected comma-separated numbers") from None
     return values
+
+
+def _number(text: str, option: str, kind: type[int] | type[float]) -> int | float:
+    try:
+        return kind(text)
+    except ValueError:
+        raise ParameterError(f"{option} {text!r}: expected one {kind.__name__}") from None
 
 
 COMMAND = Command(

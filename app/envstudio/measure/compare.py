@@ -282,6 +282,9 @@ class MethodResult:
     scene_only_error : float
         Median relative error of the untraced reference against the traced one: what
         no environment map shows (NaN without an untraced reference).
+    missing_input : str or None
+        Why the frame is a stand-in, not the technique (Method.missing_input: pem
+        without a bake for the scene); it then has no numbers and is not reliable.
     """
 
     name: str
@@ -300,6 +303,7 @@ class MethodResult:
     approximation: ImageMetrics | None = None
     approximation_error: float = float("nan")
     scene_only_error: float = float("nan")
+    missing_input: str | None = None
 
 
 @dataclass
@@ -366,6 +370,9 @@ class Comparison:
         reasons: dict[str, None] = {}
         for result in self.results:
             if result.reliable:
+                continue
+            if result.missing_input:
+                reasons[f"{result.name}: {result.missing_input}"] = None
                 continue
             run = references.get(result.reference_model or "")
             reason = run.unreliable_reason if run is not None else None
@@ -549,6 +556,10 @@ def run_comparison(
             results.append(_without_truth(result))
             continue
         results.append(_judge(result, own, mask, truth))
+        result.missing_input = method.missing_input()
+        if result.missing_input:  # a stand-in's numbers are not the method's
+            _without_truth(result)
+            continue
         approximation = untraced.get(model_of[name])
         if approximation is not None:
             result.approximation = compare_images(display, approximation.display, mask)
@@ -608,9 +619,10 @@ def _reference_values(
 
 
 def _without_truth(result: MethodResult) -> MethodResult:
-    """A method whose reflectance model the ground truth cannot render: no numbers."""
+    """No numbers: the ground truth cannot render the method's model, or its input is missing."""
     nan = float("nan")
     result.metrics = ImageMetrics(nan, nan, nan, np.zeros_like(result.metrics.flip_map))
+    result.median_relative_error = nan
     result.relative_error = np.zeros_like(result.relative_error)
     result.reliable = False
     return result

@@ -19,7 +19,10 @@ JSON (only for methods that add some).
 Heat maps colour only the reflector's pixels; the rest shows the reference
 dimmed to grey. In the JSON, PSNR of identical images is the string ``"inf"``
 (JSON has no infinity) and numbers are plain floats; ``reliable`` is false and
-``unreliable_reason`` says why (null when every method is reliable). The
+``unreliable_reason`` says why (null when every method is reliable). A method
+whose input is missing (pem without a bake) has no numbers, ``missing_input``
+says what it needs (``needs a bake: ...``, as the atlas lists it), and so does
+the reason. The
 reference's ``stopping_rule`` (``noise``: its noise under a tenth of every
 method's error, the default; ``tolerance``: the successive-half change, strict),
 ``stopped_by`` (``reliable``, ``converged``, ``max_samples``, ``time_limit``) and
@@ -268,6 +271,7 @@ def to_json(comparison: Comparison) -> dict:
                 "flip": _number(r.metrics.flip),
                 "reference_model": r.reference_model,
                 "reliable": r.reliable,
+                "missing_input": r.missing_input,
                 "median_relative_error": _number(r.median_relative_error),
                 "scene_error": _number(r.median_relative_error),
                 "approximation": None

@@ -92,8 +92,9 @@ def measure_scene_cell(
         references), ms per frame and its ratio to the baseline, GPU bytes, the
         reference it was measured against, and its image files relative to the
         atlas folder. A method that fails gets a row with its one-line reason
-        (``error``); one whose input is missing (Method.missing_input: pem without a
-        bake for the scene) a row with ``skipped`` and no numbers.
+        (``error``); one whose input is missing (MethodResult.missing_input: pem
+        without a bake for the scene) a row with ``skipped`` and no numbers, as
+        ``compare`` gives it none.
     """
     names = list(dict.fromkeys([*methods, TIMING_BASELINE]))
     classes = method_classes(names)
@@ -113,7 +114,6 @@ def measure_scene_cell(
             ssaa=settings["ssaa"],
         )
         memory = {name: gpu_bytes(session.method(name)) for name in names}
-        missing = {name: session.method(name).missing_input() for name in names}
     finally:
         session.release()
     folder.mkdir(parents=True, exist_ok=True)
@@ -122,10 +122,12 @@ def measure_scene_cell(
     baseline_ms = results[TIMING_BASELINE].frame_ms["median_ms"]
     rows = []
     for name in methods:
-        if missing[name]:
-            rows.append({**cell.__dict__, "method": name, "error": None, "skipped": missing[name]})
-            continue
         r = results[name]
+        if r.missing_input:
+            rows.append(
+                {**cell.__dict__, "method": name, "error": None, "skipped": r.missing_input}
+            )
+            continue
         approximation = r.approximation
         rows.append(
             {
@@ -141,7 +143,7 @@ def measure_scene_cell(
                 "flip": _finite(r.metrics.flip),
                 "reliable": r.reliable,
                 "ms_per_frame": r.frame_ms["median_ms"],
-                "cost_ratio": r.frame_ms["median_ms"] / baseline_ms,
+                "cost_ratio": r.frame_ms["median_ms"] / max(baseline_ms, 1e-9),
                 "gpu_bytes": memory[name],
                 "image": f"{folder.name}/{name}.png",
                 "heat_map": f"{folder.name}/{name}.relerr.png",

@@ -4,12 +4,23 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from envstudio.core.metrics import MIN_SIZE
 from envstudio.errors import ParameterError
+from envstudio.measure.compare import check_ssaa
+from envstudio.measure.ground_truth import MAX_TIME_LIMIT_S
 
-__all__ = ["DEFAULT_EXPONENTS", "DEFAULT_MESHES", "SHIPPED_MESHES", "AtlasGrid", "SceneCell"]
+__all__ = [
+    "DEFAULT_EXPONENTS",
+    "DEFAULT_MESHES",
+    "MAX_CAMERAS",
+    "SHIPPED_MESHES",
+    "AtlasGrid",
+    "SceneCell",
+]
 
 #: Phong exponents of the default grid.
 DEFAULT_EXPONENTS = (10.0, 100.0, 1000.0)
@@ -17,6 +28,8 @@ DEFAULT_EXPONENTS = (10.0, 100.0, 1000.0)
 DEFAULT_MESHES = ("sphere", "knot")
 #: Shapes built in: a UV sphere, a (2, 3) torus knot (self-occluding), the shipped bunny.
 SHIPPED_MESHES = ("sphere", "knot", "bunny")
+#: Cameras a grid may spread in azimuth (one a degree).
+MAX_CAMERAS = 360
 
 
 @dataclass(frozen=True)
@@ -55,6 +68,9 @@ class SceneCell:
 class AtlasGrid:
     """The lists that span the grid and the settings all its cells share.
 
+    Made only of values every cell can be measured with (finite, in range, the
+    supersampling compare allows: ParameterError in one line otherwise); the
+    files and names it lists are checked by :func:`.validate.check_grid`.
     ``settings`` (size, cameras, time limit, supersampling, the ``--param``
     assignments every method of every cell gets) must match for two
     runs to share a folder; the lists may grow, and only new cells are measured.
@@ -74,14 +90,30 @@ class AtlasGrid:
     def __post_init__(self):
         if not self.methods:
             raise ParameterError("--methods: expected at least one method")
+        for option, values in (("--exponents", self.exponents), ("--kd", self.kds)):
+            if not values:
+                raise ParameterError(f"{option}: expected at least one number")
+            bad = [v for v in values if not math.isfinite(v)]
+            if bad:
+                raise ParameterError(f"{option} {bad[0]}: expected finite numbers")
         bad = [n for n in self.exponents if not n > 0]
         if bad:
             raise ParameterError(f"--exponents {bad[0]:g}: expected Phong exponents > 0")
         bad = [k for k in self.kds if not 0 <= k <= 1]
         if bad:
             raise ParameterError(f"--kd {bad[0]:g}: expected diffuse weights in [0, 1]")
-        if self.cameras < 1:
-            raise ParameterError(f"--cameras {self.cameras}: expected at least 1")
+        if not 1 <= self.cameras <= MAX_CAMERAS:
+            raise ParameterError(f"--cameras {self.cameras}: expected 1..{MAX_CAMERAS}")
+        if not 0 < self.time_limit <= MAX_TIME_LIMIT_S:
+            raise ParameterError(
+                f"--time-limit {self.time_limit}: expected a positive number of seconds "
+                f"(at most {MAX_TIME_LIMIT_S:g})"
+            )
+        if min(self.size) < MIN_SIZE:
+            raise ParameterError(
+                f"--size {self.size[0]}x{self.size[1]}: expected at least {MIN_SIZE}x{MIN_SIZE}"
+            )
+        check_ssaa(self.ssaa, self.size, "--ssaa")
 
     @property
     def settings(self) -> dict:

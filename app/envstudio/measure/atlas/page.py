@@ -14,7 +14,6 @@ from __future__ import annotations
 import csv
 import html
 import io
-import json
 import math
 from collections import defaultdict
 from pathlib import Path
@@ -24,9 +23,10 @@ import numpy as np
 from envstudio.core.images import tile
 from envstudio.io.atomic import write_text_atomic
 from envstudio.io.images import read_image, write_image
+from envstudio.measure.atlas.entries import write_json
 from envstudio.measure.atlas.grid import AtlasGrid
 
-__all__ = ["CSV_COLUMNS", "error_of", "pareto_front", "write_outputs"]
+__all__ = ["CSV_COLUMNS", "OUTPUTS", "error_of", "pareto_front", "write_outputs"]
 
 #: Columns of atlas.csv, one row per cell.
 CSV_COLUMNS = (
@@ -51,6 +51,8 @@ CSV_COLUMNS = (
     "error",
     "skipped",
 )
+#: The files :func:`write_outputs` writes (atlas.png only when some cell has an image).
+OUTPUTS = ("atlas.json", "atlas.csv", "atlas.png", "index.html")
 #: Relative error at the top of the matrix's colour scale.
 ERROR_SCALE = 0.3
 
@@ -74,11 +76,11 @@ def pareto_front(points: list[tuple[float, float, str]]) -> list[tuple[float, fl
 
 
 def write_outputs(grid: AtlasGrid, rows: list[dict], folder: Path) -> list[Path]:
-    """Write atlas.json, atlas.csv, atlas.png (when images exist) and index.html."""
+    """Write atlas.json (strict JSON), atlas.csv, atlas.png (when images exist) and index.html."""
     folder = Path(folder)
     written = []
     document = {"grid": grid.to_json(), "cells": rows, "summary": summary(rows)}
-    write_text_atomic(folder / "atlas.json", json.dumps(document, indent=1))
+    write_json(folder / "atlas.json", document, indent=1)
     written.append(folder / "atlas.json")
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, CSV_COLUMNS, extrasaction="ignore", lineterminator="\n")

@@ -7,22 +7,37 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from envstudio.measure.atlas.cells import resolve_env, resolve_mesh
+from envstudio.measure.atlas.entries import free_file
 from envstudio.measure.atlas.grid import AtlasGrid
-from envstudio.measure.atlas.page import write_outputs
+from envstudio.measure.atlas.lock import LOCK_NAME, folder_lock
+from envstudio.measure.atlas.page import OUTPUTS, write_outputs
 from envstudio.measure.atlas.pool import run_tasks
 from envstudio.measure.atlas.store import AtlasStore
+from envstudio.measure.atlas.validate import check_grid
 
 __all__ = ["AtlasResult", "run_atlas"]
 
 
 class AtlasResult:
-    """What :func:`run_atlas` did: every row, and how many cells it measured or found failed."""
+    """What :func:`run_atlas` did.
 
-    def __init__(self, rows: list[dict], measured: int, failed: int):
+    Attributes
+    ----------
+    rows : list of dict
+        Every cell of the grid.
+    measured : int
+        The cells measured in this run.
+    failed : int
+        The cells whose row says why they failed.
+    notes : list of str
+        One line per entry of the folder set aside or measured again.
+    """
+
+    def __init__(self, rows: list[dict], measured: int, failed: int, notes: list[str]):
         self.rows = rows
         self.measured = measured
         self.failed = failed
+        self.notes = notes
 
 
 def run_atlas(
@@ -53,34 +68,40 @@ def run_atlas(
 
     Raises
     ------
-    ParameterError
-        An unknown environment, shape or method, or a folder of other settings.
+    ParameterError, InputFileError
+        A grid some cell of which cannot be measured (validate.check_grid; nothing is
+        written then), or a folder of other settings.
+    OutputFileError
+        Another atlas is measuring into ``folder`` (lock.folder_lock).
     """
-    for env in grid.envs:
-        resolve_env(env)
-    for mesh in grid.meshes:
-        resolve_mesh(mesh)
-    from envstudio.measure.compare import method_classes
-
-    method_classes(list(grid.methods))
-    store = AtlasStore(Path(folder), grid, force)
-    tasks = []
-    for cell in grid.scene_cells():
-        missing = store.missing(cell, grid.methods)
-        if missing:
-            tasks.append((cell, missing, grid.settings, store.folder_of(cell)))
-    total = sum(len(t[1]) for t in tasks)
-    measured = 0
-    with tqdm(total=total, desc="atlas", unit="cell", file=sys.stderr, disable=not progress) as bar:
-        for task, rows in run_tasks(tasks, jobs, scheduler):
-            store.add(task[0], rows)
-            measured += len(rows)
-            bar.update(len(rows))
-    rows = [
-        row
-        for cell in grid.scene_cells()
-        for row in store.rows(cell)
-        if row["method"] in grid.methods
-    ]
-    write_outputs(grid, rows, Path(folder))
-    return AtlasResult(rows, measured, sum(1 for r in rows if r.get("error")))
+    check_grid(grid)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    notes: list[str] = []
+    free_file(folder / LOCK_NAME, notes)
+    with folder_lock(folder):
+        store = AtlasStore(folder, grid, force)
+        tasks = []
+        for cell in grid.scene_cells():
+            missing = store.missing(cell, grid.methods)
+            if missing:
+                tasks.append((cell, missing, grid.settings, store.folder_of(cell)))
+        total = sum(len(t[1]) for t in tasks)
+        measured = 0
+        bar = tqdm(total=total, desc="atlas", unit="cell", file=sys.stderr, disable=not progress)
+        with bar:
+            for task, rows in run_tasks(tasks, jobs, scheduler):
+                store.add(task[0], rows)
+                measured += len(rows)
+                bar.update(len(rows))
+        rows = [
+            row
+            for cell in grid.scene_cells()
+            for row in store.rows(cell)
+            if row["method"] in grid.methods
+        ]
+        for name in OUTPUTS:
+            free_file(folder / name, store.notes)
+        write_outputs(grid, rows, folder)
+    failed = sum(1 for r in rows if r.get("error"))
+    return AtlasResult(rows, measured, failed, notes + store.notes)
