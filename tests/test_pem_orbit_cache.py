@@ -1,13 +1,15 @@
-"""The orbits' cache cap (methods/pem/bake/orbit.py): least recently used orbits go first."""
+"""The orbits' cache (methods/pem/bake/orbit.py): least recently used orbits go first over
+the cap; a damaged entry is one note, discarded and baked again."""
 
 from __future__ import annotations
 
 import os
+import shutil
 
 import pytest
 
 from envstudio.errors import InputFileError
-from envstudio.methods.pem.bake.orbit import orbit_cache_cap, prune_orbits
+from envstudio.methods.pem.bake.orbit import OrbitStore, orbit_cache_cap, prune_orbits
 
 
 def _orbit(root, name, megabytes, used):
@@ -43,3 +45,82 @@ def test_cache_cap_from_the_environment(monkeypatch):
         monkeypatch.setenv("ENVSTUDIO_ORBIT_CACHE_GB", bad)
         with pytest.raises(InputFileError, match="expected a size in GB > 0"):
             orbit_cache_cap()
+
+
+# -- damaged entries heal (issue 38 item 11) ---------------------------------------------------
+
+#: A tiny orbit (20° apart, 16² bake, 8² maps, CPU lookups): a view bakes in about 0.5 s.
+TINY = {"size": 16, "samples": 1, "em_size": 8, "rtol": 1e-3}
+VIEW = 108  # the scene camera's view
+
+
+def _store(root):
+    return OrbitStore("room", None, (20.0, 20.0), root=root, parameters=dict(TINY))
+
+
+@pytest.fixture(scope="module")
+def baked(tmp_path_factory):
+    """An orbit folder with the shell and one baked view."""
+    root = tmp_path_factory.mktemp("orbit")
+    store = _store(root)
+    store.shell()
+    store.bake([VIEW], workers=0)
+    return root
+
+
+def _flip(path):
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0x40
+    path.write_bytes(bytes(data))
+
+
+def _folder(path):
+    path.unlink()
+    (path / "inside").mkdir(parents=True)
+
+
+DAMAGE = {
+    "truncated": lambda p: p.write_bytes(p.read_bytes()[: p.stat().st_size // 2]),
+    "bit-flipped": _flip,
+    "empty": lambda p: p.write_bytes(b""),
+    "folder": _folder,
+}
+
+
+def _played(store, view=VIEW):
+    """What headless playback does: the shell, then the view, baked where it does not load."""
+    store.shell()
+    if store.load(view) is None:
+        store.bake([view], workers=0)
+    return store.load(view)
+
+
+def _assert_one_note_then_healed(root, path, capsys, view=VIEW):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert path.is_file()
+    assert len(err) == 1 and err[0].startswith(f"envstudio: note: {path}"), err
+    assert err[0].endswith("discarded, baking again")
+    assert _played(_store(root), view) is not None  # healed: the next run is silent
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("entry", ["views/view-00108.pem", "shell.npz"])
+@pytest.mark.parametrize("kind", DAMAGE)
+def test_a_damaged_entry_is_one_note_and_baked_again(baked, tmp_path, capsys, entry, kind):
+    root = tmp_path / "cache"
+    shutil.copytree(baked, root)
+    store = _store(root)
+    path = store.folder / entry
+    DAMAGE[kind](path)
+    assert _played(store) is not None
+    _assert_one_note_then_healed(root, path, capsys)
+
+
+def test_another_views_file_in_a_views_place_is_baked_again(baked, tmp_path, capsys):
+    root = tmp_path / "cache"
+    shutil.copytree(baked, root)
+    store = _store(root)
+    path = store.view_path(VIEW + 1)
+    shutil.copy(store.view_path(VIEW), path)
+    assert _played(store, VIEW + 1) is not None
+    _assert_one_note_then_healed(root, path, capsys, VIEW + 1)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import subprocess
 from dataclasses import asdict
 from pathlib import Path
 
@@ -200,3 +203,43 @@ def test_the_split_screen_is_restored_and_bad_entries_are_named():
         "compare.heat_scale",
     ]
     assert bad.as_settings() == CompareState().as_settings()
+
+
+@contextlib.contextmanager
+def read_only(folder: Path):
+    """``folder`` read-only for the block: a read-only bind mount as root (the file system
+    refuses, as a read-only one does), else a folder without its write bit."""
+    if os.geteuid() != 0:
+        folder.chmod(0o555)
+        try:
+            yield
+        finally:
+            folder.chmod(0o755)
+        return
+    mount = subprocess.run(["mount", "--bind", "-o", "ro", str(folder), str(folder)], check=False)
+    if mount.returncode:
+        pytest.skip("no read-only bind mount here")
+    try:
+        yield
+    finally:
+        subprocess.run(["umount", str(folder)], check=True)
+
+
+@pytest.mark.parametrize("where", ["corrupt file", "folder missing"])
+def test_a_read_only_folder_gives_defaults_and_one_line_saying_nothing_is_saved(
+    tmp_path, monkeypatch, where
+):
+    outer = tmp_path / "outer"
+    outer.mkdir()
+    folder = outer if where == "corrupt file" else outer / "envstudio"
+    (outer / "settings.json").write_bytes(b"{not json")
+    monkeypatch.setenv("ENVSTUDIO_CONFIG_DIR", str(folder))
+    with read_only(outer):
+        loaded, warning = load_settings()
+        assert loaded == ViewerSettings()
+        assert len(warning.splitlines()) == 1 and warning.endswith("settings will not be saved")
+        with pytest.raises(OutputFileError) as error:  # the viewer prints it, one line
+            save_settings(custom_settings())
+        assert "\n" not in str(error.value)
+    assert (outer / "settings.json").read_bytes() == b"{not json"  # nothing lost
+    assert sorted(p.name for p in outer.iterdir()) == ["settings.json"]

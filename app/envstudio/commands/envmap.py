@@ -5,8 +5,12 @@ from __future__ import annotations
 import argparse
 
 from envstudio.commands.common import add_env_width_option
+from envstudio.commands.map_size import default_size
 from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
+
+#: ``--size`` when not given (more for a border that needs it: ``default_size``).
+DEFAULT_SIZE = 256
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,7 +23,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("latlong", "cube", "paraboloid", "spheremap"),
         help="representation (cube: horizontal cross; paraboloid: front | back)",
     )
-    parser.add_argument("--size", type=int, default=256, help="face / output edge in texels")
+    parser.add_argument(
+        "--size",
+        type=int,
+        help=f"face / output edge in texels (default {DEFAULT_SIZE}, or 2 * border + 2 for a "
+        "wider --border)",
+    )
     parser.add_argument("--border", type=int, default=0, help="paraboloid border in texels")
     parser.add_argument("-o", "--output", required=True, help="OUT.exr")
 
@@ -36,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     output = check_output_path(args.output)
     if output.suffix.lower() != ".exr":
         raise ParameterError(f"-o {output}: expected an .exr file name")
+    args.size = default_size(args.size, args.border, DEFAULT_SIZE)
     if not 1 <= args.size <= 8192 or not 0 <= args.border < args.size // 2:
         raise ParameterError(
             f"--size {args.size} --border {args.border}: expected 1..8192 and 0 <= border < size/2"

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from envstudio.commands.common import add_env_width_option
+from envstudio.commands.map_size import default_size
 from envstudio.engine.hooks import Command
 from envstudio.errors import ParameterError
 from envstudio.io.atomic import check_output_path, write_text_atomic
@@ -36,6 +37,10 @@ __all__ = [
 
 #: Largest face edge: the GL_MAX_TEXTURE_SIZE of current GPUs and of llvmpipe.
 MAX_SIZE = 16384
+#: ``--size`` when not given (more for a paraboloid border that needs it: :func:`default_size`).
+DEFAULT_SIZE = 128
+#: ``--chain``'s ``--levels`` when not given, where the size holds them (else all it holds).
+DEFAULT_LEVELS = 8
 
 
 def kernel_from_args(args: argparse.Namespace) -> kernels.Kernel:
@@ -97,6 +102,7 @@ def _check_shared(args: argparse.Namespace) -> None:
 
 
 def _checked_args(args: argparse.Namespace) -> kernels.Kernel:
+    args.size = default_size(args.size, args.border, DEFAULT_SIZE)
     _check_shared(args)
     if not 1 <= args.size <= MAX_SIZE:
         raise ParameterError(
@@ -184,10 +190,12 @@ def run_chain(args: argparse.Namespace) -> int:
             "GGX's alpha from the level)"
         )
     ggx = args.kernel == "ggx"
-    size = args.size
+    size = args.size = DEFAULT_SIZE if args.size is None else args.size
     if size < 1 or size & (size - 1) or size > MAX_SIZE:
         raise ParameterError(f"--size {size}: --chain needs a power of two in 1..{MAX_SIZE}")
     most = size.bit_length()
+    if args.levels is None:  # as many as the size holds, up to DEFAULT_LEVELS
+        args.levels = min(DEFAULT_LEVELS, most)
     if not 1 <= args.levels <= most:
         raise ParameterError(f"--levels {args.levels}: expected 1..{most} for --size {size}")
     if not 0 < args.gloss_scale <= 20 or not -10 <= args.gloss_bias <= 20:
@@ -492,7 +500,12 @@ def add_arguments(prefilter: argparse.ArgumentParser) -> None:
         default="paraboloid",
         help="target (paraboloid: front | back; cube: horizontal cross; latlong: S x 2S)",
     )
-    prefilter.add_argument("--size", type=int, default=128, help="face edge (lat-long: height)")
+    prefilter.add_argument(
+        "--size",
+        type=int,
+        help=f"face edge (lat-long: height; default {DEFAULT_SIZE}, or 2 * border + 2 for a "
+        "wider paraboloid --border)",
+    )
     prefilter.add_argument("--border", type=int, default=0, help="paraboloid border in texels")
     prefilter.add_argument(
         "--threshold",
@@ -513,7 +526,12 @@ def add_arguments(prefilter: argparse.ArgumentParser) -> None:
         "mips; OUT.dds: DX10 cube with mips; OUT.exr: a cross per level), "
         "plus OUT.sh.json (9 SH coefficients)",
     )
-    prefilter.add_argument("--levels", type=int, default=8, help="--chain: mip levels")
+    prefilter.add_argument(
+        "--levels",
+        type=int,
+        help=f"--chain: mip levels (default {DEFAULT_LEVELS}, or as many as --size holds: "
+        "log2(size) + 1)",
+    )
     prefilter.add_argument("--gloss-scale", type=float, default=10.0, help="--chain: scale")
     prefilter.add_argument("--gloss-bias", type=float, default=1.0, help="--chain: bias")
     prefilter.add_argument(

@@ -281,8 +281,9 @@ def _explain(message: str, data: dict) -> str:
     unknown = re.match(r"Object contains unknown field `(\w+)`", what)
     if unknown:
         key = unknown[1]
-        fields = _type_at(SceneSpec, steps).__struct_fields__
-        close = difflib.get_close_matches(key, fields, n=1)
+        fields = _table_keys(_type_at(SceneSpec, steps))
+        swapped = [f for f in fields if sorted(f) == sorted(key)]  # short keys: "dk" for kd
+        close = difflib.get_close_matches(key, fields, n=1) or swapped
         hint = f"did you mean {close[0]!r}?" if close else f"expected one of {', '.join(fields)}"
         return f"{where + '.' if where else ''}{key}: unknown key, {hint}"
     missing = re.match(r"Object missing required field `(\w+)`", what)
@@ -310,6 +311,14 @@ def _type_at(tp, steps: list):
     return tp
 
 
+def _table_keys(tp) -> tuple[str, ...]:
+    """The keys of the table declared as ``tp``: a struct, optional or in a union."""
+    tp = _plain(tp)
+    if isinstance(tp, type) and issubclass(tp, msgspec.Struct):
+        return tp.__struct_fields__
+    return tuple(key for arg in typing.get_args(tp) for key in _table_keys(arg))
+
+
 def _plain(tp):
     """``tp`` without Annotated and without None in a union."""
     if typing.get_origin(tp) is Annotated:
@@ -332,6 +341,8 @@ def _describe(tp, fallback: str) -> str:
     base = _plain(tp)
     if typing.get_origin(base) is Literal:
         return "one of " + ", ".join(map(str, typing.get_args(base)))
+    if typing.get_origin(base) is list and not (meta and meta[0].min_length == 3):
+        return "a list, each " + _describe(typing.get_args(base)[0], fallback)
     if typing.get_origin(base) in (tuple, list):
         return "[x, y, z] (three numbers" + _bounds(typing.get_args(base)[0]) + ")"
     if base is int and meta and meta[0].le is not None:
@@ -358,6 +369,8 @@ def _bounds(tp) -> str:
         return f" {'>=' if low[1] == '[' else '>'} {low[0]:g}"
     if low[0] is None:
         return f" {'<=' if high[1] == ']' else '<'} {high[0]:g}"
+    if high[0] is None:
+        return f" {'>=' if low[1] == '[' else '>'} {low[0]:g}"
     return f" in {low[1]}{low[0]:g}, {high[0]:g}{high[1]}"
 
 

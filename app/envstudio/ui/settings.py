@@ -2,8 +2,11 @@
 
 Stored as JSON (``settings.json``), written atomically. A file that cannot be
 read or parsed is reported in one line, moved aside to ``settings.json.corrupt``
-and replaced by defaults: never fatal. ``ENVSTUDIO_CONFIG_DIR`` overrides the
-folder (tests, portable installs).
+and replaced by defaults: never fatal. A folder that cannot be written (read-only,
+or not creatable) is one line too: the viewer starts with the settings it could
+read, or defaults, and says that settings will not be saved; saving then raises the
+one-line :class:`~envstudio.errors.OutputFileError`. ``ENVSTUDIO_CONFIG_DIR``
+overrides the folder (tests, portable installs).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from pathlib import Path
 
 import platformdirs
 
+from envstudio.errors import OutputFileError
 from envstudio.io.atomic import write_text_atomic
 
 APP_NAME = "envmap-studio"
@@ -27,9 +31,20 @@ def config_location() -> Path:
 
 
 def config_dir() -> Path:
-    """Folder of the settings file (created if missing)."""
+    """Folder of the settings file (created if missing).
+
+    Raises
+    ------
+    OutputFileError
+        The folder cannot be created (a read-only file system, no permission).
+    """
     folder = config_location()
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputFileError(
+            f"{folder}: the settings folder cannot be created ({exc.strerror})"
+        ) from None
     return folder
 
 
@@ -90,17 +105,24 @@ class ViewerSettings:
 
 
 def settings_path() -> Path:
-    """Path of the settings file."""
-    return config_dir() / "settings.json"
+    """Path of the settings file (its folder is not created)."""
+    return config_location() / "settings.json"
 
 
 def load_settings() -> tuple[ViewerSettings, str | None]:
     """Read the settings; returns (settings, warning or None).
 
     A corrupt file is moved to ``settings.json.corrupt`` and defaults are
-    returned with a one-line warning naming the file.
+    returned with a one-line warning naming the file. Where the folder cannot be
+    created, or the corrupt file cannot be moved aside (a read-only folder), the
+    one-line warning says that settings will not be saved, and the file is left
+    as it is.
     """
     path = settings_path()
+    try:
+        config_dir()
+    except OutputFileError as exc:
+        return ViewerSettings(), f"{exc}; using defaults, settings will not be saved"
     if not path.exists():
         return ViewerSettings(), None
     try:
@@ -112,9 +134,15 @@ def load_settings() -> tuple[ViewerSettings, str | None]:
         _check_types(settings)
         return settings, None
     except (OSError, ValueError, TypeError) as exc:
-        backup = path.with_name(path.name + ".corrupt")
-        os.replace(path, backup)
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        backup = path.with_name(path.name + ".corrupt")
+        try:
+            os.replace(path, backup)
+        except OSError as move:
+            return ViewerSettings(), (
+                f"{path}: corrupt settings ({reason}); left as it is (it cannot be moved "
+                f"aside: {move.strerror}), using defaults, settings will not be saved"
+            )
         return (
             ViewerSettings(),
             f"{path}: corrupt settings ({reason}); moved to {backup.name}, using defaults",
@@ -122,8 +150,14 @@ def load_settings() -> tuple[ViewerSettings, str | None]:
 
 
 def save_settings(settings: ViewerSettings) -> None:
-    """Write the settings atomically."""
-    write_text_atomic(settings_path(), json.dumps(asdict(settings), indent=2))
+    """Write the settings atomically.
+
+    Raises
+    ------
+    OutputFileError
+        One line: the folder cannot be created or written (read-only), or the disk is full.
+    """
+    write_text_atomic(config_dir() / "settings.json", json.dumps(asdict(settings), indent=2))
 
 
 def _check_types(settings: ViewerSettings) -> None:

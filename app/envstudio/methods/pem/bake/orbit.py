@@ -10,7 +10,9 @@ parameters and the view space. Views are baked when they are first needed,
 nearest the camera first (:meth:`OrbitStore.bake`; in the viewer a background
 process, methods/pem/orbit_job.py), and never assembled into one ``.pem``: at
 5° spacing the orbit is 2664 views, so playback reads the few views it blends
-from their files (methods/pem/resident.py).
+from their files (methods/pem/resident.py). A cached view, ``shell.npz`` or resume
+part that does not load (truncated, bit-flipped, empty, a folder, another orbit's) is
+one note on stderr, discarded and baked again (as io/cache_entries.py's other caches).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import sys
+import zipfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -25,6 +29,7 @@ import numpy as np
 
 from envstudio.errors import InputFileError
 from envstudio.io.atomic import atomic_path
+from envstudio.io.cache_entries import discard
 from envstudio.io.cache_folder import cache_folder
 from envstudio.methods.pem.bake.bake import (
     BakeReport,
@@ -96,6 +101,17 @@ VIEW_ZSTD_LEVEL = 3
 #: Default cap of the orbits' cache, GB (``$ENVSTUDIO_ORBIT_CACHE_GB`` overrides): a whole
 #: 5° orbit of ``room`` is about 1.3 GB of views above the floor (studies/pem-orbit/README.md).
 ORBIT_CACHE_GB = 4.0
+
+
+def _refuse(path: Path, reason: str) -> None:
+    """A cache entry that does not load: one note, and it is discarded to be baked again."""
+    print(f"envstudio: note: {reason}; discarded, baking again", file=sys.stderr)
+    discard(path)
+
+
+def _present(path: Path) -> bool:
+    """Whether anything is at ``path``: a file, a folder, or a link (even a broken one)."""
+    return path.is_symlink() or path.exists()
 
 
 def orbit_cache_dir() -> Path:
@@ -289,16 +305,24 @@ class OrbitStore:
         return {int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()}
 
     def _read(self, view: int) -> PemBake | None:
-        """The one-view bake of ``view`` if it is there, intact and of this orbit."""
+        """The one-view bake of ``view`` if it is there, intact and of this orbit.
+
+        Whatever else is in its place (truncated, bit-flipped, empty, a folder, another
+        orbit's view) is discarded with a one-line note, so that it is baked again.
+        """
         path = self.view_path(view)
-        if not path.exists():
+        if not _present(path):
             return None
         try:
             bake = load_pem(path)
-        except InputFileError:
+        except InputFileError as error:
+            _refuse(path, str(error))
             return None
         identity = (bake.parameters.get("orbit_key"), bake.parameters.get("orbit_view"))
-        return bake if identity == (self.key, view) else None
+        if identity != (self.key, view):
+            _refuse(path, f"{path}: not view {view} of this orbit")
+            return None
+        return bake
 
     def sees_reflector(self, view: int) -> bool:
         """Whether the baked ``view`` saw a reflector part (a finite fit PSNR).
@@ -389,12 +413,14 @@ class OrbitStore:
             self._pruned = True
         for view in self._resume_parts():  # baked, then interrupted before it was kept
             task = self._task(view)
-            part = load_part(self.parts / part_name(task), self.plan.key, task)
-            if part is not None:
+            path = self.parts / part_name(task)
+            part = load_part(path, self.plan.key, task)
+            if part is None:
+                _refuse(path, f"{path}: a resume part that does not load")
+            else:
                 self._keep(view, part)
-        done = self.done()
+        missing = [v for v in dict.fromkeys(views) if self._read(v) is None]
         if self.independent is not None:
-            missing = [v for v in dict.fromkeys(views) if v not in done]
             return self._bake_coupled(missing, workers, bar, chunk or COUPLED_CHUNK)
         return run_bake(
             self.scene_name,
@@ -405,7 +431,7 @@ class OrbitStore:
             workers=workers,
             bar=bar,
             on_view=self._keep,
-            only=[v for v in dict.fromkeys(views) if v not in done],
+            only=missing,
             assemble=False,
             probe=False,
             **self.parameters,
@@ -511,19 +537,27 @@ class OrbitStore:
         )
 
     def _read_shell(self) -> PemBake | None:
+        """``shell.npz`` if it is there, intact and of this orbit; anything else in its
+        place is discarded with a one-line note (and computed again)."""
         path = self.folder / "shell.npz"
+        if not _present(path):
+            return None
+        parts = len(self.plan.tracer.part_names)
         try:
             with np.load(path, allow_pickle=False) as data:
-                if str(data["key"]) != self.key:
-                    return None
-                parts = len(self.plan.tracer.part_names)
+                key = str(data["key"])
                 geometry = {
                     "box": data["box"],
                     "origins": data["origins"],
                     "ellipsoids": data["ellipsoids"],
                     "hull": [data[f"hull_{p}"] for p in range(parts)],
                 }
-        except (OSError, ValueError, KeyError, EOFError):
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            _refuse(path, f"{path}: not a readable orbit shell ({reason})")
+            return None
+        if key != self.key:
+            _refuse(path, f"{path}: the shell of another orbit")
             return None
         return self._shell_of(geometry)
 
