@@ -72,6 +72,9 @@ BAD_CALLS = {
     "methods None": (lambda s: _compare(s, methods=None), "methods None"),
     "cache x": (lambda s: _compare(s, cache="x"), "cache 'x'"),
     "compare camera 5": (lambda s: _compare(s, camera=5), "camera 5"),
+    # an operating-system error on a named file (here a name too long for the file system)
+    "scene name too long": (lambda s: es.load_scene("x" * 300), "xxxxxxxx"),
+    "mesh name too long": (lambda s: es.load_scene(mesh="x" * 300 + ".obj"), "xxxxxxxx"),
     # refused inside the GL work, after the methods rendered
     "no reflector in view": (lambda s: _compare(s, camera=(0, 0, 1e6)), "sees no reflector"),
 }

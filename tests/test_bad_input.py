@@ -265,3 +265,24 @@ def test_a_map_too_large_for_the_memory_is_refused_from_its_header(capsys, tmp_p
     assert report["coefficients"][0][0] == pytest.approx(
         float(np.mean(read_image(path)[..., 0])) * 2 * np.sqrt(np.pi), rel=0.01
     )
+
+
+@pytest.mark.parametrize("option", ["--scene", "--env", "--mesh"])
+def test_a_file_name_the_system_refuses_is_one_line(capsys, tmp_path, option):
+    """An operating-system error on a named file (a name longer than the file system takes)
+    is the file and the reason on one line, exit 2: the class, not one call site."""
+    name = "x" * 300 + {"--scene": "", "--env": ".exr", "--mesh": ".obj"}[option]
+    status, err = run_cli(
+        capsys,
+        "render",
+        "--method",
+        "mirror",
+        option,
+        name,
+        "--size",
+        "8x8",
+        "-o",
+        str(tmp_path / "o.png"),
+    )
+    assert_one_line_error(status, err, name, "too long")
+    assert not (tmp_path / "o.png").exists()

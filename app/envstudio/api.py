@@ -34,7 +34,7 @@ import numpy.typing as npt
 from envstudio import api_arguments as check
 from envstudio.core.images import to_ldr
 from envstudio.engine.session import RenderSession, material_values, render_until_finished
-from envstudio.errors import ParameterError
+from envstudio.errors import InputFileError, ParameterError, file_error
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.time_limit import check_time_limit
 from envstudio.scene.graph import Scene
@@ -67,7 +67,13 @@ def load_scene(
     check.path(mesh, "mesh", "a mesh file (OBJ, PLY, STL, OFF, GLB)")
     if max_env_width is not None:
         check.integer(max_env_width, "max_env_width")
-    return build_scene(name_or_path, env, mesh, max_env_width)
+    try:
+        return build_scene(name_or_path, env, mesh, max_env_width)
+    except OSError as exc:
+        line = file_error(exc)
+        if line is None:
+            raise
+        raise InputFileError(line) from exc
 
 
 @contextmanager

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from envstudio.errors import ContextError, ParameterError, UserError
+from envstudio.errors import ContextError, InputFileError, ParameterError, UserError, file_error
 
 
 class _Parser(argparse.ArgumentParser):
@@ -82,6 +82,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UserError as exc:
         print(f"envstudio: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except OSError as exc:
+        line = file_error(exc)
+        if line is None:
+            raise
+        print(f"envstudio: error: {line}", file=sys.stderr)
+        return InputFileError.exit_code
     except KeyboardInterrupt:
         print("envstudio: interrupted", file=sys.stderr)
         return 130

@@ -3,7 +3,9 @@
 Every error a user can cause (bad file, bad value, no display) is raised as a
 subclass of :class:`UserError`; the CLI prints ``str(error)`` on one line and
 exits with :attr:`UserError.exit_code`, the viewer shows it in the UI and keeps
-the previous state. Anything else is a bug and keeps its traceback.
+the previous state. An operating-system error on a named file (missing, a name
+too long, no permission) is the user's too: :func:`file_error` gives its line.
+Anything else is a bug and keeps its traceback.
 """
 
 
@@ -27,3 +29,11 @@ class ParameterError(UserError):
 
 class ContextError(UserError):
     """No OpenGL context could be made (no display, no EGL)."""
+
+
+def file_error(exc: OSError) -> str | None:
+    """The one line for an operating-system error on a named file (``FILE: reason``), or
+    None when it names no file (then it is a bug and keeps its traceback)."""
+    if exc.filename is None:
+        return None
+    return f"{exc.filename}: {exc.strerror or exc}"
