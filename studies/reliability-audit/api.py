@@ -9,8 +9,9 @@ Run ``python studies/reliability-audit/api.py`` from the repository root.
 
 Record (issue 38 items 5, 6): before the fix 29 clean, 28 not of the first 57 cases (the three
 added later, ``display(1e300)`` and the two 300-character file names, not clean as well);
-after it 58 clean, 2 not: the 300-character names still end in ``OSError`` (File name too
-long) inside io/scene_file.py and io/meshes.py, as ``envstudio render --scene`` does.
+after it 58 clean, 2 not: the 300-character names still ended in ``OSError`` (File name too
+long) inside io/scene_file.py and io/meshes.py, as ``envstudio render --scene`` did; with an
+OS error on a named file made one line at the CLI's and the API's boundary, 60 clean, 0 not.
 """
 
 from __future__ import annotations
