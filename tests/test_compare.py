@@ -29,7 +29,10 @@ from envstudio.methods.hwconv import method as hwconv_method
 from envstudio.methods.hwconv.accuracy import MODES, run_accuracy
 from envstudio.methods.reference.method import ReferenceMethod
 
+# the Monte Carlo reference: these tests are about its accumulation, stopping and cache (the
+# exact one of the untraced model: tests/test_exact_reference.py)
 FAST = ["--size", "32x32", "--frames", "2", "--warmup", "1", "--param", "trace=false"]
+FAST += ["--reference", "montecarlo"]
 
 
 @pytest.fixture

@@ -250,13 +250,16 @@ def compare(
     ssaa: int = 4,
     frames: int = 5,
     cache: bool = True,
+    reference: str = "exact",
     **parameters: object,
 ) -> Report:
     """``envstudio compare`` in-process: each method against the reference of its model.
 
     ``methods`` is a list of names (or one string of comma-separated names, as
     ``--methods``). ``parameters`` go to every method that declares them (the reference's
-    included) and to the display, as ``--param`` does.
+    included) and to the display, as ``--param`` does. ``reference`` is ``--reference``:
+    ``"exact"`` (the untraced model evaluated exactly where it has an exact evaluation) or
+    ``"montecarlo"``.
 
     Raises
     ------
@@ -267,6 +270,7 @@ def compare(
     """
     from envstudio.core.metrics import MIN_SIZE
     from envstudio.measure.compare import (
+        REFERENCE_KINDS,
         check_ssaa,
         method_classes,
         plan_parameters,
@@ -285,6 +289,10 @@ def compare(
     check_ssaa(ssaa, size)
     frames = check.integer(frames, "frames", 1)
     cache = check.flag(cache, "cache")
+    if reference not in REFERENCE_KINDS:
+        raise ParameterError(
+            f"reference {reference!r}: expected one of {', '.join(REFERENCE_KINDS)}"
+        )
     plan = plan_parameters(method_classes(names), check.assignments(parameters))
     with _session(scene) as session:
         _place(session, camera)
@@ -298,6 +306,7 @@ def compare(
             cache=cache,
             time_limit_s=time_limit,
             ssaa=ssaa,
+            reference_kind=reference,
         )
     report = to_json(comparison)
     table = [

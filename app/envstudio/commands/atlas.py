@@ -39,6 +39,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="4",
         help=f"samples per pixel per axis, 1..{MAX_SSAA} as compare (default 4)",
     )
+    parser.add_argument(
+        "--reference",
+        choices=("exact", "montecarlo"),
+        default="exact",
+        help="as compare's --reference (default exact)",
+    )
     add_param_option(parser)
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     parser.add_argument(
@@ -114,6 +120,7 @@ def grid_from_args(args: argparse.Namespace):
         time_limit=_number(args.time_limit, "--time-limit", float),
         ssaa=_number(args.ssaa, "--ssaa", int),
         params=tuple(args.param),
+        reference=args.reference,
     )
     check_grid(grid)
     return grid

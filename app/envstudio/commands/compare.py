@@ -51,6 +51,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--warmup", type=int, default=3, help="untimed frames per method")
     parser.add_argument("--out", required=True, help="folder for the images, table and index.html")
     parser.add_argument(
+        "--reference",
+        choices=("exact", "montecarlo"),
+        default="exact",
+        help="exact (default): a reflectance model with an exact untraced evaluation (phong) "
+        "is evaluated exactly at the methods' samples wherever the untraced model is wanted "
+        "(the reference itself with trace=false, the approximation column with trace=true); "
+        "other models, and the traced reference, by Monte Carlo; montecarlo: Monte Carlo "
+        "throughout",
+    )
+    parser.add_argument(
         "--no-decompose",
         dest="decompose",
         action="store_false",
@@ -109,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
             extras_dir=out,
             ssaa=args.ssaa,
             decompose=args.decompose,
+            reference_kind=args.reference,
         )
     finally:
         session.release()

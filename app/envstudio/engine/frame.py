@@ -175,6 +175,43 @@ class FrameRenderer:
                 gpu_node.mesh.render(program)
         return self.read_hdr()[..., 0] > 0.5
 
+    def reflector_surface(
+        self, scene: GpuScene, camera: OrbitCamera, size: tuple[int, int]
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """The reflectors' shading frame at every pixel centre, row 0 at the top.
+
+        Returns
+        -------
+        normals : (h, w, 3) float32
+            The unit shading normal turned to the side of the face the camera sees (the
+            reference's two-sided rule); zero where no reflector is the nearest surface.
+        views : (h, w, 3) float32
+            The unit direction from the surface point to the camera; zero likewise.
+
+        Uses the HDR target of ``size`` (its content is replaced).
+        """
+        view, projection = camera.view_matrix(), camera.projection_matrix(size[0] / size[1])
+        program = self.programs.get("frame/surface.glsl")
+        set_uniform(program, "u_view", view)
+        set_uniform(program, "u_projection", projection)
+        set_uniform(program, "u_camera_position", camera.position.astype(np.float32))
+        frames = []
+        for output in (0, 1):
+            self._ensure_target(size)
+            self._fbo.use()
+            self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            self.ctx.enable(moderngl.DEPTH_TEST)
+            self.ctx.disable(moderngl.BLEND | moderngl.CULL_FACE)
+            set_uniform(program, "u_output", output)
+            for value, nodes in ((0.0, scene.local_objects()), (1.0, scene.reflectors())):
+                set_uniform(program, "u_value", value)
+                for gpu_node in nodes:
+                    set_uniform(program, "u_model", gpu_node.model)
+                    set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                    gpu_node.mesh.render(program)
+            frames.append(self.read_hdr())
+        return frames[0], frames[1]
+
     def _draw_background(self, scene: GpuScene, view, projection) -> None:
         program = self.programs.get("frame/background.glsl")
         rotation_only = view.copy()

@@ -67,6 +67,7 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
+from envstudio.measure.exact_reference import CHECKED_SAMPLES, EXACT_MODELS, exact_frame
 from envstudio.measure.ground_truth import (
     SCENE_EFFECTS,
     UNTRACED_TOO,
@@ -89,8 +90,14 @@ STOPPED_BY = {
     "converged": "converged",
     "max_samples": "sample budget spent",
     "time_limit": "time limit reached",
+    "exact": "evaluated exactly (no sampling)",
 }
 """What ends the reference's accumulation, as :attr:`ReferenceRun.stopped_by` names it."""
+EXACT = "exact"
+MONTE_CARLO = "montecarlo"
+REFERENCE_KINDS = (EXACT, MONTE_CARLO)
+"""``--reference``: the exact untraced reference where the model has one
+(measure/exact_reference.py), or Monte Carlo throughout."""
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
 """Parameters listed as "matched" in the report when a method declares them."""
 
@@ -174,6 +181,10 @@ class ReferenceRun:
     wall_s : float
         Wall time of this run's accumulation, s (what ``time_limit`` counts:
         ``total_s`` plus the time between frames).
+    exact_error : (float, float) or None
+        For an exact run (measure/exact_reference.py), its checked relative error against
+        the brute force, median and largest (``relative_standard_error`` holds the median:
+        what the methods' reliability is judged by); None for a Monte Carlo run.
     """
 
     parameters: dict[str, object]
@@ -187,6 +198,7 @@ class ReferenceRun:
     stopping_rule: str = TOLERANCE_RULE
     stopped_by: str = "converged"
     wall_s: float = 0.0
+    exact_error: tuple[float, float] | None = None
 
     @property
     def converged(self) -> bool:
@@ -198,6 +210,13 @@ class ReferenceRun:
         """Why marked metrics cannot be trusted, or None when the reference converged."""
         if self.converged:
             return None
+        if self.exact_error is not None:
+            median, largest = self.exact_error
+            return (
+                f"the exact reference's checked error (median {100 * median:.3g} %, largest "
+                f"{100 * largest:.3g} % against the brute force) is not below {NOISE_SHARE:g} "
+                "of the marked methods' median relative error"
+            )
         # batches of one Sobol sequence are negatively correlated: their spread overstates
         bound = (
             ", an upper bound under sequence=sobol"
@@ -447,6 +466,7 @@ def run_comparison(
     extras_dir: Path | None = None,
     ssaa: int = 1,
     decompose: bool = True,
+    reference_kind: str = EXACT,
 ) -> Comparison:
     """Render ``names`` and the reference at the session's camera and compare them.
 
@@ -483,6 +503,13 @@ def run_comparison(
         Where the reference traces (ground_truth.SCENE_EFFECTS), also accumulate it
         untraced and report each method's approximation error against that, its
         scene error against the traced one, and the scene-only share between them.
+    reference_kind
+        :data:`EXACT`: a model with an exact untraced evaluation
+        (exact_reference.EXACT_MODELS) is evaluated exactly, at the methods' ``ssaa``
+        samples, wherever the untraced model is wanted: as the reference itself when it does
+        not trace, as the approximation column's when it does (the traced one stays Monte
+        Carlo); another model is Monte Carlo with a one-line note. :data:`MONTE_CARLO`:
+        Monte Carlo throughout.
 
     Raises
     ------
@@ -516,13 +543,29 @@ def run_comparison(
     for model, members in groups.items():
         reference.values.update(base)
         reference.values.update(_reference_values(session, reference, model, members, base))
+        traces = SCENE_EFFECTS in reference.values and bool(reference.values[SCENE_EFFECTS])
+        exact = reference_kind == EXACT and model in EXACT_MODELS
+        if reference_kind == EXACT and not exact:
+            print(
+                f"envstudio: note: reference model {model} has no exact evaluation yet: "
+                "Monte Carlo",
+                file=sys.stderr,
+            )
+        background = next((rendered[n][2] for n in members if n in rendered), None)
+        if exact and not traces:  # the untraced model is the reference: nothing to sample
+            runs[model], mask = _exact_run(session, reference, size, ssaa, background)
+            continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
-        shared = decompose and SCENE_EFFECTS in reference.values
-        shared = shared and bool(reference.values[SCENE_EFFECTS])
-        if shared:  # the untraced estimate from the same samples
+        shared = decompose and traces
+        if shared and not exact:  # the untraced estimate from the same samples
             reference.values[UNTRACED_TOO] = True
         runs[model], mask = _converge(session, reference, size, progress, cache, judge)
-        if shared:
+        if shared and exact:
+            untraced[model] = replace(
+                _exact_run(session, reference, size, ssaa, runs[model].hdr)[0],
+                parameters=runs[model].parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
+            )
+        elif shared:
             untraced[model] = _untraced_run(session, reference, runs[model], mask)
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
@@ -788,6 +831,59 @@ def _converge(
     return run, mask
 
 
+def _exact_run(
+    session: RenderSession,
+    reference: GroundTruth,
+    size: tuple[int, int],
+    ssaa: int,
+    background: npt.NDArray[np.float32] | None,
+) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
+    """The untraced model evaluated exactly at ``ssaa``² samples a pixel (exact_reference.py),
+    as a run, and its mask; off the reflectors ``background`` (a method's frame) or black.
+
+    Raises
+    ------
+    ParameterError
+        If the camera sees no reflector (empty mask).
+    """
+    started = time.perf_counter()
+    fine = (size[0] * ssaa, size[1] * ssaa)
+    normals, views = session.renderer.reflector_surface(session.gpu_scene, session.camera, fine)
+    frame = exact_frame(
+        normals,
+        views,
+        session.scene.environment.radiance,
+        reference.values.as_dict(),
+        ssaa,
+        started,
+    )
+    if not frame.mask.any():
+        _empty_mask(session)
+    outside = np.zeros_like(frame.hdr) if background is None else background
+    hdr = np.where(frame.mask[..., None], frame.hdr, outside).astype(np.float32)
+    median, largest = frame.error
+    print(
+        f"reference: exact in {frame.seconds:.2f} s; against the brute force at "
+        f"{CHECKED_SAMPLES} samples: median {100 * median:.2g} %, largest {100 * largest:.2g} %",
+        file=sys.stderr,
+    )
+    run = ReferenceRun(
+        parameters=reference.values.as_dict(),
+        status=ConvergenceStatus(),
+        frames_ms=[1e3 * frame.seconds],
+        total_s=frame.seconds,
+        relative_standard_error=median,
+        resumed_samples=0,
+        hdr=hdr,
+        display=_display_image(session, hdr),
+        stopping_rule=EXACT,
+        stopped_by=EXACT,
+        wall_s=frame.seconds,
+        exact_error=frame.error,
+    )
+    return run, frame.mask
+
+
 def _untraced_run(
     session: RenderSession, reference: GroundTruth, traced: ReferenceRun, mask
 ) -> ReferenceRun:
@@ -812,12 +908,17 @@ def _reflector_mask(session: RenderSession, reference: GroundTruth) -> npt.NDArr
     """
     mask = reference.coverage()
     if not mask.any():
-        camera = session.camera
-        raise ParameterError(
-            f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
-            f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
-        )
+        _empty_mask(session)
     return mask
+
+
+def _empty_mask(session: RenderSession) -> None:
+    """Raise the one line for a camera that sees no reflector."""
+    camera = session.camera
+    raise ParameterError(
+        f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
+        f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
+    )
 
 
 def _stop_line(reference: GroundTruth, noise: float, wall_s: float, stopped_by: str) -> str:

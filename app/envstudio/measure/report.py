@@ -50,6 +50,7 @@ from envstudio.engine.split_view import SplitSettings
 from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
 from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult, ReferenceRun
+from envstudio.measure.exact_reference import CHECKED_SAMPLES
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
 
 HEAT_SCALE = SplitSettings().heat_scale
@@ -238,6 +239,7 @@ def to_json(comparison: Comparison) -> dict:
             "wall_s": ref.wall_s,
             "relative_standard_error": _number(ref.relative_standard_error),
             "resumed_samples": ref.resumed_samples,
+            "exact_error": _exact_json(ref),
             "files": {"exr": "reference.exr", "png": "reference.png"},
         },
         "references": {
@@ -247,6 +249,7 @@ def to_json(comparison: Comparison) -> dict:
                 "samples": run.status.samples,
                 "converged": run.status.converged,
                 "relative_standard_error": _number(run.relative_standard_error),
+                "exact_error": _exact_json(run),
                 "files": _reference_files(comparison, model),
             }
             for model, run in _references(comparison).items()
@@ -258,6 +261,7 @@ def to_json(comparison: Comparison) -> dict:
                 "converged": run.status.converged,
                 "wall_s": run.wall_s,
                 "relative_standard_error": _number(run.relative_standard_error),
+                "exact_error": _exact_json(run),
             }
             for model, run in comparison.untraced.items()
         },
@@ -443,7 +447,15 @@ def _reference_line(comparison: Comparison) -> str:
 
 
 def _run_line(ref: ReferenceRun) -> str:
-    """Samples and time, the stopping rule and what stopped it, the noise, the half-change."""
+    """Samples and time, the stopping rule and what stopped it, the noise, the half-change;
+    for an exact run, its time and its checked error."""
+    if ref.exact_error is not None:
+        median, largest = ref.exact_error
+        return (
+            f"exact: the untraced model's integrals at the methods' samples in "
+            f"{ref.total_s:.2f} s; against the brute force at {CHECKED_SAMPLES} of them: "
+            f"median {_percent(median)}, largest {_percent(largest)}"
+        )
     change = ref.status.rms_change
     state = "converged" if ref.converged else "NOT converged"
     half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
@@ -509,6 +521,14 @@ def _fixed(value: float) -> str:
 def _model_text(result: MethodResult) -> str:
     """The reference a row was measured against, or why it has no numbers."""
     return result.reference_model or "no ground truth for this model"
+
+
+def _exact_json(run: ReferenceRun) -> dict[str, float] | None:
+    """An exact run's checked error against the brute force (None: a Monte Carlo run)."""
+    if run.exact_error is None:
+        return None
+    median, largest = run.exact_error
+    return {"median": median, "largest": largest, "samples": CHECKED_SAMPLES}
 
 
 def _references(comparison: Comparison) -> dict[str, ReferenceRun]:

@@ -73,6 +73,7 @@ __all__ = [
     "SpectralPlan",
     "clear_lookups",
     "ggx_spectral_chain",
+    "lobe_at",
     "phong_spectral",
     "plan",
     "source_spectrum",
@@ -137,7 +138,10 @@ class SpectralPlan:
 
 
 def _phong(exponent: float, c: np.ndarray) -> np.ndarray:
-    """(N + 1)/2π max(c, 0)^N, float32, as exp(N ln c) floored at e^−80 like the brute force."""
+    """(N + 1)/2π max(c, 0)^N, float32, as exp(N ln c) floored at e^−80 like the brute force
+    (N = 1, the cosine lobe, directly)."""
+    if exponent == 1.0:
+        return np.maximum(c, np.float32(0.0), dtype=np.float32) * np.float32(1.0 / math.pi)
     out = np.log(np.maximum(c, np.float32(1e-30)), dtype=np.float32)
     out *= np.float32(exponent)
     np.maximum(out, np.float32(-80.0), out=out)
@@ -177,12 +181,30 @@ def _stride(height: int, wanted_rows: int) -> int:
 
 @lru_cache(maxsize=32)
 def plan(
-    height: int, width: int, exponent: float, eps: float = DEFAULT_EPS, kernel: str = "phong"
+    height: int,
+    width: int,
+    exponent: float,
+    eps: float = DEFAULT_EPS,
+    kernel: str = "phong",
+    min_rows: int = 16,
+    oversample: float = 1.0,
+    footprint: bool = False,
 ) -> SpectralPlan:
     """The tables for a Phong exponent N (or a GGX α, ``kernel="ggx"``) and an (h, w)
-    lat-long source (module docstring).
+    lat-long source (module docstring); the grid has at least ``min_rows`` rows and
+    ``oversample`` times the rows its spacing asks for (a finer grid interpolates more
+    closely: N = 1's max(c, 0) has a kink).
 
-    Cached: they depend on the source's shape, the kernel and N (α) only.
+    With ``footprint`` each texel's weight is the lobe integrated over the texel, not the
+    lobe at its centre times its solid angle: the integral of the map as a function
+    constant over each texel (what a renderer that samples directions and reads the texel
+    there converges to), exact however narrow the lobe against the texels. Along φ that is
+    the box filter of the column's width, ĝ_m · sinc(m Δφ / 2) on the spectrum; along θ
+    each row is cut into sub-rows (each at most a quarter of the lobe's width, N^−½, or of
+    a half radian) integrated by three Gauss–Legendre points weighed by sin θ.
+
+    Cached: they depend on the source's shape, the kernel, N (α), the grid's rows and
+    ``footprint`` only.
     """
     if kernel not in ("phong", "ggx"):
         raise ValueError(f"kernel {kernel!r}: expected 'phong' or 'ggx'")
@@ -210,7 +232,7 @@ def plan(
     # Rows: source rows within Θ of the grid row (the lobe below eps of its peak past Θ).
     # The grid has R = h p / q rows: every q-th source row boundary (q | h) or p rows per
     # source row when h is short.
-    wanted = max(16, math.ceil(math.pi * math.sqrt(width_n) / _SPACING))
+    wanted = max(min_rows, math.ceil(oversample * math.pi * math.sqrt(width_n) / _SPACING))
     if wanted <= height:
         q, p = _stride(height, wanted), 1
     else:
@@ -229,19 +251,45 @@ def plan(
     source_row = q * (i // p)[:, None] + offset + np.arange(span)[None, :]
     inside = (source_row >= 0) & (source_row < height)
     row = np.clip(source_row, 0, height - 1)
-    theta_l = math.pi * (row + 0.5) / height
-    edges = np.cos(math.pi * np.arange(height + 1) / height)
-    band = (2.0 * math.pi / width) * (edges[:-1] - edges[1:])
-    cos_part = (np.cos(theta)[:, None] * np.cos(theta_l)).astype(np.float32)
-    sin_part = (np.sin(theta)[:, None] * np.sin(theta_l)).astype(np.float32)
     # g is even in Δφ: its DFT over ``samples`` points is the DCT-I of the first half.
     cos_t = np.cos(2.0 * math.pi * np.arange(samples // 2 + 1) / samples).astype(np.float32)
     lobe = _phong if kernel == "phong" else _ggx
-    g = lobe(exponent, cos_part[..., None] + sin_part[..., None] * cos_t)
-    g *= (band[row] * inside / samples).astype(np.float32)[..., None]
+    # With the footprint, each source row as ``cuts`` sub-rows of Gauss points in θ.
+    cuts = min(64, max(1, math.ceil(4.0 * row_angle * math.sqrt(max(width_n, 16.0)))))
+    g = np.zeros((*row.shape, len(cos_t)), np.float32)
+    for theta_l, solid_angle in _row_quadrature(row, height, width, cuts if footprint else 0):
+        cos_part = (np.cos(theta)[:, None] * np.cos(theta_l)).astype(np.float32)
+        sin_part = (np.sin(theta)[:, None] * np.sin(theta_l)).astype(np.float32)
+        part = lobe(exponent, cos_part[..., None] + sin_part[..., None] * cos_t)
+        part *= (solid_angle * inside / samples).astype(np.float32)[..., None]
+        g += part
     weights = scipy.fft.dct(g, type=1, axis=-1, workers=-1)[..., : m_max + 1]
+    if footprint:  # the column's box along φ: ĝ_m sinc(m Δφ / 2)
+        weights *= np.sinc(np.arange(m_max + 1) / width).astype(np.float32)
     weights = np.ascontiguousarray(weights.transpose(0, 2, 1)[:, :, None, :], dtype=np.float32)
     return SpectralPlan(float(exponent), (height, width), q, p, offset, weights, grid_cols, kernel)
+
+
+#: Gauss–Legendre nodes and weights on [−1, 1] (three points: exact to degree 5).
+_GAUSS = ((-math.sqrt(0.6), 5.0 / 9.0), (0.0, 8.0 / 9.0), (math.sqrt(0.6), 5.0 / 9.0))
+
+
+def _row_quadrature(row: np.ndarray, height: int, width: int, cuts: int):
+    """(θ, Δω) pairs whose sum Σ Δω g(θ) stands for source row ``row``'s θ-band integral of
+    g times its column's width: the row's centre and solid angle (``cuts`` 0: the brute
+    force's texel centre), or ``cuts`` sub-rows of three Gauss–Legendre points each in θ,
+    weighed by sin θ (the integral over the texel)."""
+    d_phi = 2.0 * math.pi / width
+    if cuts == 0:
+        top, bottom = math.pi * row / height, math.pi * (row + 1) / height
+        yield 0.5 * (top + bottom), d_phi * (np.cos(top) - np.cos(bottom))
+        return
+    half = 0.5 * math.pi / (height * cuts)
+    for k in range(cuts):
+        middle = math.pi * (row + (k + 0.5) / cuts) / height
+        for node, weight in _GAUSS:
+            theta_l = middle + node * half
+            yield theta_l, d_phi * weight * half * np.sin(theta_l)
 
 
 def source_spectrum(radiance: npt.ArrayLike, frequencies: int) -> np.ndarray:
@@ -370,6 +418,11 @@ def _bspline(t: np.ndarray) -> list[np.ndarray]:
 def _lookup(size: int, grid_rows: int, grid_cols: int) -> sparse.csr_matrix:
     """The B-spline basis at the cube texels of face n: (6 n², padded grid cells) sparse."""
     uv = latlong.direction_to_uv(cubemap.texel_directions(size)).reshape(-1, 2)
+    return _basis(uv, grid_rows, grid_cols)
+
+
+def _basis(uv: np.ndarray, grid_rows: int, grid_cols: int) -> sparse.csr_matrix:
+    """The B-spline basis at lat-long coordinates ``uv`` (t, 2): (t, padded grid cells) sparse."""
     y = uv[:, 1] * grid_rows - 0.5 + _PAD
     x = uv[:, 0] * grid_cols + _PAD
     y0, x0 = np.floor(y), np.floor(x)
@@ -419,6 +472,60 @@ def phong_spectral(
         with ThreadPoolExecutor(threads) as pool:
             return _level(padded, before, level, size, pool)
     return _level(padded, before, level, size, None)
+
+
+def lobe_at(
+    radiance: npt.ArrayLike,
+    exponent: float,
+    directions: npt.ArrayLike,
+    *,
+    eps: float = DEFAULT_EPS,
+    min_rows: int = 16,
+    oversample: float = 1.0,
+    footprint: bool = False,
+    threads: int = 2,
+) -> npt.NDArray[np.float32]:
+    """The Phong prefilter of a lat-long source at any directions (module docstring).
+
+    E(r) = (N + 1)/2π Σ_l max(⟨r, l⟩, 0)^N L_l Δω_l, the brute force's sum over the source's
+    texels, at each direction r; N = 1 gives the irradiance over π, ∫ L max(⟨n, l⟩, 0)/π.
+
+    Parameters
+    ----------
+    radiance : (h, w, 3) array_like
+        The lat-long source, linear radiance, each texel constant over its solid angle.
+    exponent : float
+        N > 0.
+    directions : (..., 3) array_like
+        Unit directions r.
+    eps, min_rows, oversample, footprint, threads
+        As :func:`plan` and :func:`phong_spectral`.
+
+    Returns
+    -------
+    (..., 3) float32
+        E at each direction: the brute force (with ``footprint``, the integral over each
+        texel) up to the terms below ``eps`` of the lobe's peak and the cubic B-spline
+        interpolation between the grid's exact sums.
+    """
+    image = np.asarray(radiance, dtype=np.float32)
+    targets = np.asarray(directions, dtype=np.float64)
+    level = plan(
+        image.shape[0],
+        image.shape[1],
+        float(exponent),
+        eps,
+        min_rows=min_rows,
+        oversample=oversample,
+        footprint=footprint,
+    )
+    padded, before = _padded_spectrum(source_spectrum(image, level.frequencies), [level])
+    with ThreadPoolExecutor(max(threads, 1)) as pool:
+        spectrum = _grid_spectrum(padded, before, level, pool if threads > 1 else None)
+    grid = _spline_grid(spectrum, level.grid_cols)
+    uv = latlong.direction_to_uv(targets.reshape(-1, 3)).reshape(-1, 2)
+    out = _basis(uv, level.grid_rows, level.grid_cols) @ grid.reshape(-1, 3)
+    return np.asarray(out, dtype=np.float32).reshape(*targets.shape[:-1], 3)
 
 
 def _level(padded, before, level: SpectralPlan, size: int, pool) -> npt.NDArray[np.float32]:

@@ -112,6 +112,7 @@ def measure_scene_cell(
             cache=True,
             time_limit_s=settings["time_limit"],
             ssaa=settings["ssaa"],
+            reference_kind=settings["reference"],
         )
         memory = {name: gpu_bytes(session.method(name)) for name in names}
     finally:

@@ -86,6 +86,7 @@ class AtlasGrid:
     time_limit: float
     ssaa: int
     params: tuple[str, ...] = ()
+    reference: str = "exact"
 
     def __post_init__(self):
         if not self.methods:
@@ -124,6 +125,7 @@ class AtlasGrid:
             "time_limit": self.time_limit,
             "ssaa": self.ssaa,
             "params": list(self.params),
+            "reference": self.reference,
         }
 
     def scene_cells(self) -> list[SceneCell]:

@@ -1,0 +1,293 @@
+"""The exact reference of the untraced environment-map model: no Monte Carlo, no noise.
+
+Without tracing, the reference's answer at a footprint sample is a deterministic integral of
+the environment over a lobe. For seed 000 eq. 8's model (the reference's ``model=phong``,
+shaders/reference/material.glsl), at a surface point with shading normal n seen from v,
+
+    L_o = (1 − F) k_d ∫ L(l) max(⟨n, l⟩, 0)/π dl + F (N + 1)/2π ∫ L(l) max(⟨r, l⟩, 0)^N dl,
+
+F = Schlick(f_λ, ⟨n, v⟩) per channel, r = reflect(−v, n), both integrals over the whole
+sphere of the environment as the reference sees it (each lat-long texel constant over its
+solid angle): the diffuse term depends on n alone, the glossy one on r alone. Both are the
+brute force's sums with each texel's lobe integrated over the texel (the map as a function
+constant over each texel, which the Monte Carlo reference converges to however narrow the
+lobe), evaluated at any direction by prefilter.spectral.lobe_at (N = 1 is the irradiance
+over π). The samples are the ones compare renders every method at: ``ssaa`` ×
+``ssaa`` per pixel, rasterised (engine FrameRenderer.reflector_surface, the reference's
+two-sided rule), box-filtered over the covered ones (compare.footprint_filter). A sample
+whose shading normal faces away from the viewer reflects nothing, as in the reference.
+
+What it leaves out is stated and checked: the spectral sums drop the lobe below
+``DEFAULT_EPS`` of its peak and interpolate between exact grid sums (cubic B-spline);
+:func:`checked_error` holds the result against the plain brute-force sum (every texel, cut
+into sub-texels finer than the lobe) at a fixed set of the samples and reports the median
+and largest relative difference.
+
+Microfacet (GGX) and Banks depend on (n, v) or (v, t) together: they have no exact
+evaluation yet, and :data:`EXACT_MODELS` says so.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core import latlong
+from envstudio.prefilter import spectral
+
+#: The reflectance models with an exact untraced evaluation here.
+EXACT_MODELS = ("phong",)
+#: Rows of the spectral grid at least (N = 1's kink at the horizon wants a fine grid; from
+#: 256 the diffuse sum is within 5·10⁻⁴ of the brute force at every direction tried).
+GRID_ROWS = 256
+#: Footprint samples held against the brute force by :func:`checked_error`.
+CHECKED_SAMPLES = 64
+
+
+def schlick(fresnel: npt.ArrayLike, cos_theta: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """Schlick's F per channel (seed 000 §5.2): (..., 3) for (3,) f_λ and (...,) cosines."""
+    m = 1.0 - np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
+    f0 = np.asarray(fresnel, dtype=np.float64)
+    return f0 + (1.0 - f0) * (m**5)[..., None]
+
+
+def eq8_terms(
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    fresnel: npt.ArrayLike,
+    kd: npt.ArrayLike,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The frame of each sample: (facing, r, diffuse weight (1 − F) k_d, glossy weight F).
+
+    Parameters
+    ----------
+    normals, views : (s, 3) array_like
+        Unit shading normals (turned to the seen side of the face) and directions to the
+        camera.
+    fresnel, kd : (3,) array_like
+        f_λ and k_d, linear RGB.
+
+    Returns
+    -------
+    facing : (s,) bool
+        ⟨n, v⟩ > 0: the sample reflects something.
+    reflections : (s, 3) float64
+        r = 2 ⟨n, v⟩ n − v.
+    diffuse, glossy : (s, 3) float64
+        (1 − F) k_d and F, zero where not facing.
+    """
+    n = np.asarray(normals, dtype=np.float64)
+    v = np.asarray(views, dtype=np.float64)
+    cos = np.einsum("sk,sk->s", n, v)
+    facing = cos > 0.0
+    glossy = schlick(fresnel, cos) * facing[:, None]
+    diffuse = (1.0 - glossy) * np.asarray(kd, dtype=np.float64) * facing[:, None]
+    return facing, 2.0 * cos[:, None] * n - v, diffuse, glossy
+
+
+def eq8_radiance(
+    radiance: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    fresnel: npt.ArrayLike,
+    kd: npt.ArrayLike,
+    exponent: float,
+) -> npt.NDArray[np.float32]:
+    """Exitant radiance of the untraced ``model=phong`` at each sample (module docstring).
+
+    Parameters
+    ----------
+    radiance : (h, w, 3) array_like
+        The lat-long environment, linear radiance.
+    normals, views : (s, 3) array_like
+        As :func:`eq8_terms`.
+    fresnel, kd : (3,) array_like
+        f_λ and k_d.
+    exponent : float
+        The Phong exponent N.
+
+    Returns
+    -------
+    (s, 3) float32
+        Linear radiance.
+    """
+    _, reflections, diffuse, glossy = eq8_terms(normals, views, fresnel, kd)
+    irradiance = spectral.lobe_at(radiance, 1.0, normals, min_rows=GRID_ROWS, footprint=True)
+    lobe = spectral.lobe_at(radiance, exponent, reflections, min_rows=GRID_ROWS, footprint=True)
+    return (diffuse * irradiance + glossy * lobe).astype(np.float32)
+
+
+def texel_split(height: int, exponent: float) -> int:
+    """Sub-texels per texel edge for :func:`brute_force_radiance`: each at most half the
+    lobe's width (about N^−½), where three Gauss points an axis integrate it closely."""
+    return int(min(16, max(1, math.ceil(2.0 * (math.pi / height) * math.sqrt(exponent)))))
+
+
+def gauss_texels(height: int, width: int, split: int) -> tuple[np.ndarray, np.ndarray]:
+    """Quadrature points of the lat-long sphere that integrate a function over every texel:
+    each texel cut into ``split`` × ``split`` parts of 3 × 3 Gauss–Legendre points.
+
+    Returns
+    -------
+    directions : (3 split h · 3 split w, 3) float64
+        Unit directions, rows (θ) outermost, in the lat-long convention (core.latlong).
+    weights : (3 split h · 3 split w,) float64
+        Solid angle of each point, sr; they sum to 4π.
+    """
+    nodes = np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)])
+    gauss = np.array([5.0, 8.0, 5.0]) / 9.0
+    theta_half = 0.5 * math.pi / (height * split)
+    theta = (np.arange(height * split) + 0.5)[:, None] * 2.0 * theta_half + nodes * theta_half
+    theta = theta.ravel()
+    theta_w = np.tile(gauss * theta_half, height * split) * np.sin(theta)
+    u_half = 0.5 / (width * split)
+    u = ((np.arange(width * split) + 0.5)[:, None] * 2.0 * u_half + nodes * u_half).ravel()
+    phi_w = np.tile(gauss * u_half, width * split) * 2.0 * math.pi
+    uv = np.stack(np.broadcast_arrays(u[None, :], (theta / math.pi)[:, None]), axis=-1)
+    directions = latlong.uv_to_direction(uv.reshape(-1, 2))
+    return directions, (theta_w[:, None] * phi_w[None, :]).ravel()
+
+
+def _lobe_sums(
+    radiance: np.ndarray, split: int, queries: np.ndarray, kernel
+) -> npt.NDArray[np.float64]:
+    """Σ over :func:`gauss_texels` points of kernel(⟨q, l⟩) L(l) dω for (s, 3) queries."""
+    h, w = radiance.shape[:2]
+    directions, weights = gauss_texels(h, w, split)
+    texel = np.repeat(np.repeat(radiance, 3 * split, axis=0), 3 * split, axis=1)
+    weighted = texel.reshape(-1, 3).astype(np.float64) * weights[:, None]
+    out = np.zeros((len(queries), 3))
+    for start in range(0, len(directions), _POINTS_PER_BLOCK):
+        block = slice(start, start + _POINTS_PER_BLOCK)
+        out += kernel(queries @ directions[block].T) @ weighted[block]
+    return out
+
+
+#: Quadrature points per block of :func:`_lobe_sums` (bounds its memory).
+_POINTS_PER_BLOCK = 1 << 18
+#: Largest point × sample product :func:`checked_error` spends (fewer samples past it).
+_CHECK_BUDGET = 3e8
+
+
+def brute_force_radiance(
+    radiance: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    fresnel: npt.ArrayLike,
+    kd: npt.ArrayLike,
+    exponent: float,
+) -> npt.NDArray[np.float64]:
+    """:func:`eq8_radiance` by a plain sum over quadrature points of every texel
+    (:func:`gauss_texels`, :func:`texel_split`): slow, for checks. Same parameters;
+    (s, 3) float64."""
+    n = np.asarray(normals, dtype=np.float64)
+    _, reflections, diffuse, glossy = eq8_terms(n, views, fresnel, kd)
+    image = np.asarray(radiance, dtype=np.float32)
+    scale = (exponent + 1.0) / (2.0 * math.pi)
+    irradiance = _lobe_sums(image, 1, n, lambda c: np.maximum(c, 0.0) / math.pi)
+    lobe = _lobe_sums(
+        image,
+        texel_split(image.shape[0], exponent),
+        reflections,
+        lambda c: scale * np.maximum(c, 0.0) ** exponent,
+    )
+    return diffuse * irradiance + glossy * lobe
+
+
+def checked_error(
+    radiance: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    values: npt.ArrayLike,
+    fresnel: npt.ArrayLike,
+    kd: npt.ArrayLike,
+    exponent: float,
+    samples: int = CHECKED_SAMPLES,
+) -> tuple[float, float]:
+    """The relative differences of ``values`` from the brute force at ``samples`` facing
+    samples spread evenly through the list (deterministic): (median, largest).
+
+    Each difference is over the sample's largest channel (a dark channel of a coloured
+    sample is not divided by its own near-zero value).
+    """
+    n = np.asarray(normals, dtype=np.float64)
+    v = np.asarray(views, dtype=np.float64)
+    facing = np.nonzero(np.einsum("sk,sk->s", n, v) > 0.0)[0]
+    if not len(facing):
+        return 0.0, 0.0
+    image = np.asarray(radiance)
+    points = 9.0 * image.shape[0] * image.shape[1] * texel_split(image.shape[0], exponent) ** 2
+    samples = int(min(samples, max(8, _CHECK_BUDGET // points), len(facing)))
+    picked = facing[np.linspace(0, len(facing) - 1, samples).astype(int)]
+    exact = brute_force_radiance(radiance, n[picked], v[picked], fresnel, kd, exponent)
+    computed = np.asarray(values, dtype=np.float64)[picked]
+    scale = np.maximum(exact.max(axis=1), 1e-30)
+    differences = np.abs(computed - exact).max(axis=1) / scale
+    return float(np.median(differences)), float(differences.max())
+
+
+@dataclass
+class ExactFrame:
+    """The exact reference of one frame: per pixel, and the checked error.
+
+    Attributes
+    ----------
+    hdr : (h, w, 3) float32
+        Linear radiance, the mean over each pixel's covered samples; zero off the reflectors.
+    mask : (h, w) bool
+        Pixels with at least one covered sample.
+    error : (float, float)
+        :func:`checked_error` of the samples: median and largest relative difference.
+    seconds : float
+        Wall time of the evaluation (the GL surface pass included).
+    """
+
+    hdr: npt.NDArray[np.float32]
+    mask: npt.NDArray[np.bool_]
+    error: tuple[float, float]
+    seconds: float
+
+
+def exact_frame(
+    normals: npt.NDArray[np.float32],
+    views: npt.NDArray[np.float32],
+    radiance: npt.ArrayLike,
+    values: dict[str, object],
+    ssaa: int,
+    started: float | None = None,
+) -> ExactFrame:
+    """The exact ``model=phong`` frame from the reflectors' surface at ``ssaa``² samples a pixel.
+
+    Parameters
+    ----------
+    normals, views : (h·ssaa, w·ssaa, 3) float32
+        engine FrameRenderer.reflector_surface at the fine size (zero off the reflectors).
+    radiance : (h, w, 3) array_like
+        The lat-long environment the reference reads.
+    values : dict
+        The reference's parameter values (``fresnel``, ``kd``, ``phong_exponent``).
+    ssaa : int
+        Samples per pixel per axis.
+    started : float or None
+        ``time.perf_counter()`` when the surface pass began (None: now).
+    """
+    started = time.perf_counter() if started is None else started
+    covered = np.linalg.norm(normals, axis=-1) > 0.5
+    fresnel = np.asarray(values["fresnel"], dtype=np.float64)
+    kd = np.asarray(values["kd"], dtype=np.float64)
+    exponent = float(values["phong_exponent"])
+    n, v = normals[covered], views[covered]
+    shaded = eq8_radiance(radiance, n, v, fresnel, kd, exponent)
+    error = checked_error(radiance, n, v, shaded, fresnel, kd, exponent)
+    fine = np.zeros(normals.shape, dtype=np.float32)
+    fine[covered] = shaded
+    h, w = normals.shape[0] // ssaa, normals.shape[1] // ssaa
+    weights = covered.reshape(h, ssaa, w, ssaa).astype(np.float64)
+    count = weights.sum(axis=(1, 3))
+    sums = fine.reshape(h, ssaa, w, ssaa, 3).astype(np.float64).sum(axis=(1, 3))
+    hdr = (sums / np.maximum(count, 1.0)[..., None]).astype(np.float32)
+    return ExactFrame(hdr, count > 0, error, time.perf_counter() - started)
