@@ -67,7 +67,7 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
-from envstudio.measure.exact_reference import CHECKED_SAMPLES, EXACT_MODELS, exact_frame
+from envstudio.measure.exact_reference import EXACT_MODELS, CheckedError, exact_frame
 from envstudio.measure.ground_truth import (
     SCENE_EFFECTS,
     UNTRACED_TOO,
@@ -181,7 +181,7 @@ class ReferenceRun:
     wall_s : float
         Wall time of this run's accumulation, s (what ``time_limit`` counts:
         ``total_s`` plus the time between frames).
-    exact_error : (float, float) or None
+    exact_error : CheckedError or None
         For an exact run (measure/exact_reference.py), its checked relative error against
         the brute force, median and largest (``relative_standard_error`` holds the median:
         what the methods' reliability is judged by); None for a Monte Carlo run.
@@ -198,7 +198,7 @@ class ReferenceRun:
     stopping_rule: str = TOLERANCE_RULE
     stopped_by: str = "converged"
     wall_s: float = 0.0
-    exact_error: tuple[float, float] | None = None
+    exact_error: CheckedError | None = None
 
     @property
     def converged(self) -> bool:
@@ -211,11 +211,11 @@ class ReferenceRun:
         if self.converged:
             return None
         if self.exact_error is not None:
-            median, largest = self.exact_error
+            checked = self.exact_error
             return (
-                f"the exact reference's checked error (median {100 * median:.3g} %, largest "
-                f"{100 * largest:.3g} % against the brute force) is not below {NOISE_SHARE:g} "
-                "of the marked methods' median relative error"
+                f"the exact reference's checked error (median {100 * checked.median:.3g} %, "
+                f"largest {100 * checked.largest:.3g} % against the brute force) is not below "
+                f"{NOISE_SHARE:g} of the marked methods' median relative error"
             )
         # batches of one Sobol sequence are negatively correlated: their spread overstates
         bound = (
@@ -861,10 +861,11 @@ def _exact_run(
         _empty_mask(session)
     outside = np.zeros_like(frame.hdr) if background is None else background
     hdr = np.where(frame.mask[..., None], frame.hdr, outside).astype(np.float32)
-    median, largest = frame.error
+    checked = frame.error
     print(
         f"reference: exact in {frame.seconds:.2f} s; against the brute force at "
-        f"{CHECKED_SAMPLES} samples: median {100 * median:.2g} %, largest {100 * largest:.2g} %",
+        f"{checked.samples} samples: median {100 * checked.median:.2g} %, largest "
+        f"{100 * checked.largest:.2g} %",
         file=sys.stderr,
     )
     run = ReferenceRun(
@@ -872,7 +873,7 @@ def _exact_run(
         status=ConvergenceStatus(),
         frames_ms=[1e3 * frame.seconds],
         total_s=frame.seconds,
-        relative_standard_error=median,
+        relative_standard_error=checked.median,
         resumed_samples=0,
         hdr=hdr,
         display=_display_image(session, hdr),

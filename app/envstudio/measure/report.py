@@ -37,6 +37,7 @@ import html
 import json
 import math
 import os
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +51,6 @@ from envstudio.engine.split_view import SplitSettings
 from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
 from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult, ReferenceRun
-from envstudio.measure.exact_reference import CHECKED_SAMPLES
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
 
 HEAT_SCALE = SplitSettings().heat_scale
@@ -450,11 +450,11 @@ def _run_line(ref: ReferenceRun) -> str:
     """Samples and time, the stopping rule and what stopped it, the noise, the half-change;
     for an exact run, its time and its checked error."""
     if ref.exact_error is not None:
-        median, largest = ref.exact_error
+        checked = ref.exact_error
         return (
             f"exact: the untraced model's integrals at the methods' samples in "
-            f"{ref.total_s:.2f} s; against the brute force at {CHECKED_SAMPLES} of them: "
-            f"median {_percent(median)}, largest {_percent(largest)}"
+            f"{ref.total_s:.2f} s; against the brute force at {checked.samples} of them: "
+            f"median {_percent(checked.median)}, largest {_percent(checked.largest)}"
         )
     change = ref.status.rms_change
     state = "converged" if ref.converged else "NOT converged"
@@ -525,10 +525,7 @@ def _model_text(result: MethodResult) -> str:
 
 def _exact_json(run: ReferenceRun) -> dict[str, float] | None:
     """An exact run's checked error against the brute force (None: a Monte Carlo run)."""
-    if run.exact_error is None:
-        return None
-    median, largest = run.exact_error
-    return {"median": median, "largest": largest, "samples": CHECKED_SAMPLES}
+    return None if run.exact_error is None else asdict(run.exact_error)
 
 
 def _references(comparison: Comparison) -> dict[str, ReferenceRun]:
