@@ -14,7 +14,7 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.cached_reference import CachedReferences
-from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
+from envstudio.measure.compare import MONTE_CARLO, method_classes, plan_parameters, run_comparison
 from envstudio.measure.ground_truth_cache import cache_limit_bytes, load_state, prune, save_state
 from envstudio.measure.matching import GlossinessLink
 from envstudio.methods.reference import method as reference_method
@@ -157,7 +157,9 @@ def test_the_grid_finds_compares_reference_and_measures_a_tile_as_compare_did(gl
     plan = plan_parameters(
         method_classes(["kautz"]), ["trace=false", "max_samples=8", f"phong_exponent={exponent:g}"]
     )
-    comparison = run_comparison(session, ["kautz"], size, plan, frames=1, warmup=0, cache=True)
+    comparison = run_comparison(  # a saved Monte Carlo reference (an exact one saves nothing)
+        session, ["kautz"], size, plan, frames=1, warmup=0, cache=True, reference_kind=MONTE_CARLO
+    )
     session.release()
 
     viewer = RenderSession(sphere_scene(_gradient(), rings=16), ctx=gl_ctx)  # the window's session

@@ -195,18 +195,29 @@ def brute_force_radiance(
     n = np.asarray(normals, dtype=np.float64)
     _, reflections, diffuse, glossy = eq8_terms(n, views, fresnel, kd)
     image = np.asarray(radiance, dtype=np.float32)
-    scale = (exponent + 1.0) / (2.0 * math.pi)
     out = np.zeros(diffuse.shape)
     if diffuse.any():
         out += diffuse * _lobe_sums(image, 1, n, lambda c: np.maximum(c, 0.0) / math.pi)
     if glossy.any():
         out += glossy * _lobe_sums(
-            image,
-            texel_split(image.shape[0], exponent),
-            reflections,
-            lambda c: scale * np.maximum(c, 0.0) ** exponent,
+            image, texel_split(image.shape[0], exponent), reflections, _phong_lobe(exponent)
         )
     return out
+
+
+def _phong_lobe(exponent: float):
+    """c ↦ (N + 1)/2π max(c, 0)^N, evaluated only where it is above 10⁻¹⁵ of its peak (the
+    rest, zero here, is below what float64 sums of the lobe's mass can hold)."""
+    scale = (exponent + 1.0) / (2.0 * math.pi)
+    floor = 1e-15 ** (1.0 / exponent)
+
+    def lobe(c: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(c)
+        inside = c > floor
+        out[inside] = scale * c[inside] ** exponent
+        return out
+
+    return lobe
 
 
 @dataclass(frozen=True)
