@@ -18,6 +18,11 @@ from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image, write_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.exact_reference import eq8_radiance, exact_frame
+from envstudio.measure.ground_truth import PairedEstimates
+from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.environment import Environment
+from envstudio.scene.graph import Node, Scene
+from envstudio.scene.primitives import torus_knot
 
 FRESNEL = np.array([0.9, 0.5, 0.2])
 KD = np.array([0.2, 0.4, 0.6])
@@ -179,3 +184,84 @@ def test_the_exact_reference_agrees_with_the_monte_carlo_one_within_its_noise(ba
     # over the ball's interior (hundreds of pixels) the sampled one's noise averages out
     assert np.median(np.abs(relative[core])) < 2.0 * noise["relative_standard_error"]
     assert abs(relative[core].mean()) < 0.5 * noise["relative_standard_error"]
+
+
+def knot_scene() -> Scene:
+    """The self-occluding (2, 3) torus knot under the spot sky (tests/test_mitsuba_gl.py's)."""
+    camera = OrbitCamera(azimuth=30.0, elevation=25.0, distance=2.6, fov_y=45.0)
+    knot = Node("knot", torus_knot().fitted(1.0))
+    return Scene(Environment(spot_map(32)), [knot], camera, "knot")
+
+
+def test_the_control_variate_is_the_traced_estimate_with_far_less_noise_on_the_knot():
+    """T − β (U − exact): the same expectation as the plain traced estimate T (per pixel,
+    their difference is within the noise), and on the knot, where the traced and untraced
+    estimates of the same samples vary together, a fraction of T's noise."""
+    session = RenderSession(knot_scene())
+    try:
+        reference = session.method("reference")
+        reference.values.update(
+            {"trace": True, "untraced_too": True, "sequence": "random", "adaptive": False}
+        )
+        reference.values.update({"samples": 4, "max_samples": 65536, "tolerance": 1e-5})
+        reference.values.update({"fresnel": 0.9, "kd": 0.1, "phong_exponent": 20.0})
+        for _ in range(16):
+            session.render_offscreen(reference, (24, 24))
+        paired = reference.paired()
+        normals, views = session.renderer.reflector_surface(
+            session.gpu_scene, session.camera, (96, 96)
+        )
+        radiance = session.scene.environment.radiance
+        exact = exact_frame(normals, views, radiance, reference.values.as_dict(), 4)
+    finally:
+        session.release()
+    controlled, controlled_error = paired.controlled(exact.hdr)
+    whole = (np.linalg.norm(normals, axis=-1) > 0.5).reshape(24, 4, 24, 4).all(axis=(1, 3))
+    luminance = np.array([0.2126, 0.7152, 0.0722])
+    lit = whole & ((paired.traced @ luminance) > 0)
+    assert lit.sum() > 100
+    combined = np.hypot(paired.traced_error @ luminance, controlled_error @ luminance)
+    z = ((controlled - paired.traced) @ luminance)[lit] / combined[lit]
+    assert np.median(np.abs(z)) < 1.5, np.median(np.abs(z))
+    plain = np.median((paired.traced_error @ luminance)[lit] / (paired.traced @ luminance)[lit])
+    control = np.median((controlled_error @ luminance)[lit] / (controlled @ luminance)[lit])
+    assert control < 0.5 * plain, (control, plain)
+
+
+def test_the_control_is_never_noisier_than_the_plain_estimate():
+    """PairedEstimates.controlled on synthetic batches: β is Cov(T, U) / Var(U) per pixel,
+    its error the spread the formula promises, never above T's, whatever the correlation."""
+    rng = np.random.default_rng(3)
+    batches, pixels = 4000, 5
+    correlation = np.array([1.0, 0.9, 0.5, 0.0, -0.5])
+    u = rng.normal(size=(batches, pixels))
+    t = correlation * u + np.sqrt(1 - correlation**2) * rng.normal(size=(batches, pixels)) + 3.0
+    u += 2.0
+
+    def errors(samples):  # (1, pixels, 3): the standard error of the mean, every channel
+        return np.repeat((samples.std(axis=0, ddof=1) / np.sqrt(batches))[None, :, None], 3, -1)
+
+    paired = PairedEstimates(
+        traced=np.repeat(t.mean(axis=0)[None, :, None], 3, -1),
+        traced_error=errors(t),
+        untraced=np.repeat(u.mean(axis=0)[None, :, None], 3, -1),
+        untraced_error=errors(u),
+        difference_error=errors(t - u),
+    )
+    estimate, error = paired.controlled(np.full((1, pixels, 3), 2.0))
+    plain = paired.traced_error[0, :, 0]
+    expected = plain * np.sqrt(1 - np.clip(correlation, 0, None) ** 2)
+    np.testing.assert_allclose(error[0, :, 0], expected, atol=0.05 * plain.max())
+    assert np.all(error[0, :, 0] <= plain + 1e-9)
+    assert np.all(np.abs(estimate[0, :, 0] - 3.0) < 4 * np.maximum(error[0, :, 0], 1e-6))
+
+
+def test_compare_of_a_traced_sphere_uses_the_control_variate_in_seconds(ball, tmp_path):
+    out = tmp_path / "traced"
+    argv = ["compare", "--scene", str(ball), "--methods", "mirror,hwconv", "--out", str(out)]
+    argv += ["--size", "24x24", "--frames", "2", "--warmup", "1", "--param", "trace=true"]
+    assert main(argv) == 0
+    report = json.loads((out / "compare.json").read_text())
+    assert report["reliable"] and report["reference"]["stopped_by"] == "reliable"
+    assert report["untraced_references"]["phong"]["exact_error"]["largest"] < 1e-2
+    assert "control variate" in (out / "compare.md").read_text()

@@ -508,3 +508,43 @@ def test_the_viewer_starts_again_from_every_setting_it_saved(xvfb, tmp_path, met
     for key in ("method", "display", "grid", "compare", "panels_shown", "match_glossiness"):
         assert again[key] == saved[key], key
     assert again["method_values"][method] | values == again["method_values"][method]
+
+
+def test_the_grids_labels_give_compares_exact_numbers_in_the_window(xvfb, tmp_path):
+    """Issue 40 item 5: in the real window, once the view stays still, the hwconv and mirror
+    tiles' labels give their error against the exact reference, and the numbers equal
+    compare's (--reference exact, trace=false, the tile's size and the grid's ssaa)."""
+    from envstudio.measure.compare import EXACT, method_classes, plan_parameters, run_comparison
+    from envstudio.measure.exact_tiles import SSAA
+
+    config = tmp_path / "config"
+    config.mkdir()
+    (config / "settings.json").write_text(json.dumps({"window_size": [160, 96]}))
+    probe = tmp_path / "probe.json"
+    names = ["hwconv", "mirror"]
+    result = run_view(
+        config,
+        xvfb,
+        *("--method", "hwconv", "--grid", ",".join(names), "--hide-panels", "--frames", "80"),
+        probe=probe,
+        env={"ENVSTUDIO_PROBE_FRAME_MS": "100"},
+    )
+    assert result.returncode == 0, result.stderr
+    grid = json.loads(probe.read_text())["grid"]
+    (size,) = {tuple(tile["size"]) for tile in grid["tiles"]}
+    session = matched_session(names)
+    try:
+        exponent = session.method("hwconv").values["phong_exponent"]
+        plan = plan_parameters(
+            method_classes(names), ["trace=false", f"phong_exponent={exponent!r}"]
+        )
+        comparison = run_comparison(
+            session, names, size, plan, frames=1, warmup=0, ssaa=SSAA, reference_kind=EXACT
+        )
+    finally:
+        session.release()
+    for row in comparison.results:
+        numbers = grid["numbers"][row.name]
+        assert numbers["against"] == f"exact {size[0]}×{size[1]}", numbers
+        assert numbers["relative_error"] == pytest.approx(row.median_relative_error, abs=1e-3)
+        assert numbers["psnr_db"] == pytest.approx(row.metrics.psnr_db, abs=1e-3)

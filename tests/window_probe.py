@@ -10,13 +10,16 @@ whether it is on show (a tab behind another is not).
 It records the method on show with its parameter values, the display values, the
 camera's azimuth and elevation and the split screen's state.
 In the grid view it records the tiles (method, GL viewport, render size), the tile
-fraction, the labels' boxes (window points) and the status line's grid text.
+fraction, the labels' boxes (window points), each tile's label numbers and the status
+line's grid text.
 The window tests (tests/test_window_smoke.py) read it beside the screenshot.
 
 ``ENVSTUDIO_PROBE_CLICK=FRAME,X,Y`` presses and releases the left button at window
 point (X, Y) before frame FRAME (counted from 0) through the viewer's own input
 handlers, as the window toolkit would; ``ENVSTUDIO_PROBE_KEY=FRAME,NAME`` presses key NAME
-(moderngl-window's name, e.g. F12) before frame FRAME.
+(moderngl-window's name, e.g. F12) before frame FRAME. ``ENVSTUDIO_PROBE_FRAME_MS=MS``
+makes each frame last at least MS milliseconds (the grid's timed steps then get a known
+wall time from ``--frames``).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import time as clock
 from dataclasses import asdict
 from typing import ClassVar
 
@@ -40,6 +44,7 @@ class ProbedViewer(app.Viewer):
     record: ClassVar[dict] = {}
 
     def on_render(self, time: float, frametime: float) -> None:
+        started = clock.perf_counter()
         click = os.environ.get("ENVSTUDIO_PROBE_CLICK")
         if click:
             frame, x, y = (int(v) for v in click.split(","))
@@ -88,9 +93,12 @@ class ProbedViewer(app.Viewer):
                     for t in self.grid.tiles
                 ],
                 "labels": [list(box) for box in labels],
+                "numbers": {name: asdict(n) for name, n in self.grid.numbers.items()},
                 "status": self.status.mode_text,
             },
         }
+        least_ms = float(os.environ.get("ENVSTUDIO_PROBE_FRAME_MS", "0"))
+        clock.sleep(max(0.0, least_ms / 1e3 - (clock.perf_counter() - started)))
 
 
 def probe(out: str, argv: list[str]) -> int:

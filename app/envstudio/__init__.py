@@ -12,7 +12,7 @@ try:  # one source of truth: pyproject.toml's version, as installed
 except PackageNotFoundError:  # imported from a checkout that was never installed
     __version__ = "0+unknown"
 
-_API = ("load_scene", "render", "display", "compare", "show", "Image", "Report")
+_API = ("load_scene", "render", "display", "compare", "error_curve", "show", "Image", "Report")
 
 
 def __getattr__(name: str):

@@ -9,6 +9,7 @@
     ldr = es.display(img, exposure=0, tonemap="aces")    # (h, w, 3) uint8 sRGB, as the PNG
     report = es.compare(scene, ["kautz", "hwconv"], size=(128, 128), time_limit=120)
     report.table, report.images["kautz"], report.reference
+    curve = es.error_curve(scene, ["kautz", "hwconv"])  # error against N, exact reference
 
 Everything runs on one headless context per process, made on first use and reused
 (the scene on the GPU is kept while the same scene is rendered again). Bad input
@@ -39,7 +40,16 @@ from envstudio.io.scene_setup import build_scene
 from envstudio.measure.time_limit import check_time_limit
 from envstudio.scene.graph import Scene
 
-__all__ = ["Image", "Report", "compare", "display", "load_scene", "render", "show"]
+__all__ = [
+    "Image",
+    "Report",
+    "compare",
+    "display",
+    "error_curve",
+    "load_scene",
+    "render",
+    "show",
+]
 
 _SESSION: RenderSession | None = None
 _CONTEXT = None
@@ -323,3 +333,58 @@ def compare(
     ]
     images = {r.name: r.hdr for r in comparison.results}
     return Report(table, images, comparison.reference.hdr, report)
+
+
+def error_curve(
+    scene: Scene,
+    methods: Sequence[str],
+    exponents: Sequence[float] = (5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000),
+    size: Sequence[int] = (64, 64),
+    ssaa: int = 2,
+    camera: Sequence[float] | None = None,
+    **parameters: object,
+) -> dict:
+    """Each method's approximation error against the exact reference at each Phong exponent.
+
+    At each N, what ``compare --reference exact --param trace=false --param
+    phong_exponent=N`` measures (measure/error_curve.py): a LOD bias or a GGX α matched to N
+    as compare matches it. ``parameters`` go to every method that declares them, as
+    :func:`compare`'s do (not ``phong_exponent`` or ``trace``: the curve sets them).
+
+    Returns
+    -------
+    dict
+        ``{"exponents": [...], "methods": {name: {"median_relative_error": [...],
+        "psnr_db": [...]}}}``, one value per exponent (NaN where a method refuses its values
+        at that N), and ``"notes"``: the methods left out (a reflectance model with no
+        exact reference yet, such as banks) and the points missing, one line each.
+
+    Raises
+    ------
+    ParameterError
+        An unknown method or parameter, a value out of range or of the wrong type, a bad
+        scene, size, camera, ``ssaa`` or exponent (each within the range of every method
+        declaring ``phong_exponent``); no method with an exact reference; a camera that
+        sees no reflector.
+    """
+    from envstudio.core.metrics import MIN_SIZE
+    from envstudio.measure import error_curve as curve
+    from envstudio.measure.compare import check_ssaa, method_classes, plan_parameters
+
+    check.scene(scene)
+    names = check.methods(methods)
+    size = check.size(size)
+    if min(size) < MIN_SIZE:
+        raise ParameterError(f"size {size!r}: the curve needs at least {MIN_SIZE}x{MIN_SIZE}")
+    camera = check.camera(camera)
+    check_ssaa(ssaa, size)
+    values = curve.check_exponents(exponents, names)
+    for name in ("phong_exponent", "trace"):
+        if name in parameters:
+            raise ParameterError(f"{name}: error_curve sets it (exponents; trace=false)")
+    assignments = check.assignments(parameters)
+    plan_parameters(method_classes(names), assignments)
+    with _session(scene) as session:
+        _place(session, camera)
+        measured = curve.error_curve(session, names, values, size, ssaa, assignments)
+    return measured.as_dict()

@@ -22,11 +22,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
-import mitsuba_scene as ms  # noqa: E402
-from test_mitsuba_gl import sphere_scene  # noqa: E402
-
-from envstudio.engine.session import RenderSession  # noqa: E402
-from envstudio.measure.exact_reference import exact_frame  # noqa: E402
+import mitsuba_scene as ms
+from envstudio.engine.session import RenderSession
+from envstudio.measure.exact_reference import exact_frame
+from test_mitsuba_gl import sphere_scene
 
 
 def main(spp: int) -> None:
@@ -34,9 +33,7 @@ def main(spp: int) -> None:
     session = RenderSession(scene, cube_size=16)
     try:
         started = time.perf_counter()
-        normals, views = session.renderer.reflector_surface(
-            session.gpu_scene, session.camera, size
-        )
+        normals, views = session.renderer.reflector_surface(session.gpu_scene, session.camera, size)
         values = {"fresnel": (0.0, 0.0, 0.0), "kd": (1.0, 1.0, 1.0), "phong_exponent": 1.0}
         ours = exact_frame(normals, views, scene.environment.radiance, values, 1, started)
     finally:
@@ -50,7 +47,9 @@ def main(spp: int) -> None:
     sigma = np.sqrt(np.sum(s**2, 0)) / t.sum(0)
     per_pixel = np.median(np.abs(o - t) / t, axis=0)
     print(f"pixels {int(interior.sum())}, Mitsuba {spp} paths each; exact in {ours.seconds:.2f} s")
-    print("ratio ours / Mitsuba per channel:", np.round(ratio, 5), "± (1 sigma)", np.round(sigma, 5))
+    print(
+        "ratio ours / Mitsuba per channel:", np.round(ratio, 5), "± (1 sigma)", np.round(sigma, 5)
+    )
     print("median per-pixel |relative difference|:", np.round(per_pixel, 5))
 
 

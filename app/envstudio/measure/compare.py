@@ -56,6 +56,7 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
+from envstudio.core.env_sampling import LUMINANCE
 from envstudio.core.images import displayed
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.core.parameters import parse_assignments
@@ -185,6 +186,10 @@ class ReferenceRun:
         For an exact run (measure/exact_reference.py), its checked relative error against
         the brute force, median and largest (``relative_standard_error`` holds the median:
         what the methods' reliability is judged by); None for a Monte Carlo run.
+    control_variate : bool
+        A traced run estimated as the exact untraced reference plus the sampled difference
+        traced − untraced (:func:`_control_variate`): ``hdr`` and the noise are that
+        estimate's.
     """
 
     parameters: dict[str, object]
@@ -199,6 +204,7 @@ class ReferenceRun:
     stopped_by: str = "converged"
     wall_s: float = 0.0
     exact_error: CheckedError | None = None
+    control_variate: bool = False
 
     @property
     def converged(self) -> bool:
@@ -556,16 +562,23 @@ def run_comparison(
             runs[model], mask = _exact_run(session, reference, size, ssaa, background)
             continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
+        if exact and traces:  # a control variate: traced = exact untraced + sampled difference
+            known, known_mask = _exact_run(session, reference, size, ssaa, background)
+            reference.values[UNTRACED_TOO] = True
+            runs[model], mask = _converge(
+                session, reference, size, progress, False, judge, control=(known.hdr, known_mask)
+            )
+            if decompose:
+                untraced[model] = replace(
+                    known,
+                    parameters=runs[model].parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
+                )
+            continue
         shared = decompose and traces
-        if shared and not exact:  # the untraced estimate from the same samples
+        if shared:  # the untraced estimate from the same samples
             reference.values[UNTRACED_TOO] = True
         runs[model], mask = _converge(session, reference, size, progress, cache, judge)
-        if shared and exact:
-            untraced[model] = replace(
-                _exact_run(session, reference, size, ssaa, runs[model].hdr)[0],
-                parameters=runs[model].parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
-            )
-        elif shared:
+        if shared:
             untraced[model] = _untraced_run(session, reference, runs[model], mask)
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
@@ -774,10 +787,13 @@ def _converge(
     progress: bool,
     cache: bool,
     judge: ReferenceJudge,
+    control: tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]] | None = None,
 ) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
     """Accumulate until ``judge``'s rule or the reference stops it; the run and the mask.
 
-    Resumed and saved with ``cache``. Raises on an empty mask.
+    Resumed and saved with ``cache``. With ``control`` (the exact untraced frame and its
+    mask, the reference accumulating ``untraced_too``) the image judged and returned is the
+    control variate's (:func:`_control_variate`). Raises on an empty mask.
     """
     frames_ms: list[float] = []
     checkpoint = ground_truth_cache.Checkpoint(session, reference, size) if cache else None
@@ -795,7 +811,10 @@ def _converge(
         mask = _reflector_mask(session, reference)
         while True:
             if judge.due(reference.status.batches):
-                judge.judge(reference, session.read_hdr(), mask)
+                if control is None:
+                    judge.judge(reference, session.read_hdr(), mask)
+                else:
+                    judge.judge(reference, *_control_variate(session, reference, control, mask))
             if progress:
                 bar.set_postfix_str(_progress_line(reference, judge), refresh=False)
                 bar.update()
@@ -812,9 +831,11 @@ def _converge(
     if resumed:
         print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
     stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
-    noise = reference.relative_standard_error()
+    if control is None:
+        hdr, noise = session.read_hdr(), reference.relative_standard_error()
+    else:
+        hdr, _, noise = _control_variate(session, reference, control, mask)
     print(f"reference: {_stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
-    hdr = session.read_hdr()
     run = ReferenceRun(
         parameters=reference.values.as_dict(),
         status=replace(reference.status),
@@ -827,8 +848,45 @@ def _converge(
         stopping_rule=judge.rule,
         stopped_by=stopped_by,
         wall_s=wall_s,
+        control_variate=control is not None,
     )
     return run, mask
+
+
+def _control_variate(
+    session: RenderSession,
+    reference: GroundTruth,
+    control: tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]],
+    mask: npt.NDArray[np.bool_],
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_], float]:
+    """The traced reference with the untraced estimate of the same samples as its control
+    variate (ground_truth.PairedEstimates.controlled): T − β (U − exact untraced).
+
+    Both Monte Carlo estimates come from the same samples, so where the scene adds little
+    (occlusion, local and self-reflections) T and U vary together and only what it adds is
+    left to sample: nothing where nothing is traced. Unbiased up to the exact reference's
+    stated error and the footprint (the exact one's samples are the methods' grid, the
+    sampled ones random points of the footprint); β per pixel, so never noisier than T.
+
+    Returns
+    -------
+    hdr : (h, w, 3) float32
+        The control-variate estimate on the pixels the exact run covers, the plain traced
+        estimate elsewhere (a silhouette pixel only the traced footprint reaches).
+    mask : (h, w) bool
+        ``mask``, as judged.
+    noise : float
+        Median over ``mask`` of the estimate's luminance standard error over its luminance
+        (channel errors added: an upper bound, as the reference's).
+    """
+    exact, covered = control[0], control[1][..., None]
+    estimate, error = reference.paired().controlled(exact)
+    hdr = np.where(covered, estimate, session.read_hdr()).astype(np.float32)
+    luminance = hdr[mask] @ LUMINANCE
+    spread = np.where(covered, error, np.inf)[mask] @ LUMINANCE
+    lit = luminance > 0
+    noise = float(np.median(spread[lit] / luminance[lit])) if lit.any() else float("inf")
+    return hdr, mask, noise
 
 
 def _exact_run(

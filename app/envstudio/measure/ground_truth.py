@@ -97,6 +97,59 @@ SCENE_EFFECTS = "trace"
 UNTRACED_TOO = "untraced_too"
 
 
+@dataclass(frozen=True)
+class PairedEstimates:
+    """The traced and untraced estimates of one accumulation, from the same samples.
+
+    Every array is (h, w, 3) float32, row 0 at the top; the errors are standard errors of the
+    means from the spread of the batch means (inf before two batches).
+
+    Attributes
+    ----------
+    traced, traced_error
+        The reference as traced, and its error.
+    untraced, untraced_error
+        The untraced model's estimate from the same sample directions, and its error.
+    difference_error
+        The error of traced − untraced (from the spread of each batch's difference): with
+        the other two, their covariance.
+    """
+
+    traced: npt.NDArray[np.float32]
+    traced_error: npt.NDArray[np.float32]
+    untraced: npt.NDArray[np.float32]
+    untraced_error: npt.NDArray[np.float32]
+    difference_error: npt.NDArray[np.float32]
+
+    def controlled(
+        self, exact: npt.NDArray[np.float32]
+    ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """The traced estimate with the untraced one as its control variate.
+
+        With the untraced model known exactly (``exact``, (h, w, 3)), T − β (U − exact) has
+        T's expectation for any β, and the least variance at β = Cov(T, U) / Var(U), per pixel
+        and channel: Var(T) (1 − ρ²), never more than T's own. Cov is
+        (Var T + Var U − Var(T − U)) / 2 from the three errors. β is clipped to [0, 2]
+        (estimated from the same batches, it is noisy where they are few). Where nothing is
+        traced T = U and β = 1: the exact value, no noise; where local objects hide the map
+        T and U hardly vary together and β → 0: the plain traced estimate.
+
+        Returns
+        -------
+        estimate, error : (h, w, 3) float32
+        """
+        errors = (self.traced_error, self.untraced_error, self.difference_error)
+        finite = np.logical_and.reduce([np.isfinite(e) for e in errors])
+        t2, u2, d2 = (np.where(finite, e, 0.0).astype(np.float64) ** 2 for e in errors)
+        covariance = 0.5 * (t2 + u2 - d2)
+        beta = np.divide(covariance, u2, out=np.ones_like(u2), where=u2 > 0)
+        beta = np.clip(beta, 0.0, 2.0)
+        estimate = self.traced - beta * (self.untraced - exact)
+        variance = np.maximum(t2 - 2.0 * beta * covariance + beta**2 * u2, 0.0)
+        error = np.where(finite, np.sqrt(variance), np.inf)
+        return estimate.astype(np.float32), error.astype(np.float32)
+
+
 class GroundTruth(Protocol):
     """What ``compare``, its stopping rule and its cache use of the ground-truth method.
 
@@ -134,6 +187,10 @@ class GroundTruth(Protocol):
 
     def untraced_relative_standard_error(self) -> float:
         """Its noise, as :meth:`relative_standard_error`."""
+
+    def paired(self) -> PairedEstimates | None:
+        """The traced and untraced estimates of the same samples with their errors and the
+        error of their difference, or None without :data:`UNTRACED_TOO`."""
 
     def accumulation_state(self) -> dict[str, npt.NDArray]:
         """The accumulation as arrays, to save."""

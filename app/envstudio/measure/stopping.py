@@ -158,14 +158,17 @@ class ReferenceJudge:
         reference: GroundTruth,
         reference_hdr: npt.NDArray[np.float32],
         mask: npt.NDArray[np.bool_],
+        noise: float | None = None,
     ) -> Judgement:
-        """Measure the noise and every method's error against ``reference_hdr`` over ``mask``."""
+        """Measure the noise and every method's error against ``reference_hdr`` over ``mask``;
+        ``noise``, when given, is the noise of ``reference_hdr`` (a control-variate estimate's),
+        else the reference's own."""
         status = reference.status
         judgement = Judgement(
             batches=status.batches,
             samples=status.samples,
             seconds=status.run_elapsed(),
-            noise=reference.relative_standard_error(),
+            noise=reference.relative_standard_error() if noise is None else noise,
             errors={
                 name: median_error(hdr, reference_hdr, mask) for name, hdr in self.frames.items()
             },

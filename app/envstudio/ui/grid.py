@@ -24,7 +24,13 @@ Reference numbers (:class:`GridMetrics`)
     reflectance model at its matched glossiness). A tile that has one is
     rendered at that reference's size under the same camera and measured
     against it as ``compare --ssaa 1`` measures (its label ends "(cached
-    128×128)"); the reference's own tile is not needed. Otherwise, when the
+    128×128)"); the reference's own tile is not needed. Then each tile of a
+    model with an exact untraced reference (phong, issue 40) is measured
+    against that reference at its render size, in steps
+    (measure/exact_tiles.py): its approximation error, the median relative
+    error and PSNR that ``compare --reference exact --param trace=false
+    --ssaa 2`` reports at that size (the label ends "(exact 64×64)"); they
+    replace a cached reference's numbers. Otherwise, when the
     ground truth (the reference) is one of the tiles, it converges at the
     tile's size under the shared camera, and every :data:`METRICS_INTERVAL_S`
     seconds each tile of the same reflectance model is measured against it:
@@ -56,6 +62,8 @@ from envstudio.engine.registry import method_class
 from envstudio.errors import UserError
 from envstudio.gpu.programs import ShaderCompileError
 from envstudio.measure.cached_reference import CachedReference, CachedReferences, describe
+from envstudio.measure.exact_reference import EXACT_MODELS
+from envstudio.measure.exact_tiles import ExactTiles, TileRequest
 
 FRACTIONS = (1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 6, 1 / 8)
 FRACTION_NAMES = ("1", "1/2", "1/3", "1/4", "1/6", "1/8")
@@ -69,7 +77,10 @@ EMA = 0.2
 """Weight of the newest frame in each tile's shown ms per frame."""
 METRICS_INTERVAL_S = 0.5
 STILL_S = 0.3
-"""Seconds the view must stay unchanged before the saved references are looked up."""
+"""Seconds the view must stay unchanged before the saved references are looked up and the
+exact ones evaluated."""
+ROUND_TRIP = 1e-9
+"""Relative difference under which a tile's N matched from b or α is the hub's N."""
 CLICK_POINTS = 4.0
 """A press and release closer than this (window points) is a click, not an orbit."""
 LABEL_PAD = 3.0
@@ -139,14 +150,22 @@ class TileScale:
 
 @dataclass
 class TileNumbers:
-    """A tile's label numbers: ms per frame, and PSNR (dB) and FLIP against the reference."""
+    """A tile's label numbers: ms per frame, and PSNR (dB) with FLIP or the median relative
+    error against the reference."""
 
     ms: float | None = None
     psnr_db: float | None = None
     flip: float | None = None
     error: str | None = None
     against: str | None = None
-    """What PSNR and FLIP are against when not the reference's tile ("cached 128×128")."""
+    """What the numbers are against when not the reference's tile ("cached 128×128",
+    "exact 64×64")."""
+    relative_error: float | None = None
+    """The median relative luminance error against the exact reference."""
+
+    def forget(self) -> None:
+        """No numbers against a reference (the ms per frame and an error stay)."""
+        self.psnr_db = self.flip = self.against = self.relative_error = None
 
 
 @dataclass
@@ -256,8 +275,8 @@ class GridState:
 
 
 class GridMetrics:
-    """PSNR and FLIP of the tiles against a reference: one ``compare`` saved, else the
-    reference's tile; one piece of work at a time.
+    """PSNR and FLIP of the tiles against a reference: one ``compare`` saved, the exact
+    reference, else the reference's tile; one piece of work at a time.
 
     Cached references (:class:`envstudio.measure.cached_reference.CachedReferences`)
         While the camera, the scene, the display or a tile's parameters change, nothing
@@ -266,6 +285,15 @@ class GridMetrics:
         tile and candidate), and then, one tile a step, each tile that has one is
         rendered at that reference's size and measured against it. Its label says
         so ("cached 128×128"). A change clears those numbers.
+    The exact reference (:class:`envstudio.measure.exact_tiles.ExactTiles`)
+        Then, for the tiles of a model with an exact untraced evaluation
+        (exact_reference.EXACT_MODELS), the reference at the tile's f_λ, k_d and the
+        Phong exponent its glossiness is matched to (the hub's N where the tile's is its
+        round trip, as ``compare`` holds the reference's N), evaluated at the tile's render
+        size in steps, and each such tile measured against it: median relative error and
+        PSNR, as ``compare --reference exact --param trace=false`` reports them at that
+        size and its ``--ssaa`` (exact_tiles.SSAA) ("exact 64×64"). They replace
+        a cached reference's numbers; a change clears them.
     The reference's tile
         Tiles with no cached reference, of the live reference's model and size, are
         measured against the reference's tile as shown, one a step.
@@ -293,9 +321,10 @@ class GridMetrics:
         self.truth = truth
         self._clock = clock
         self._mask_renderer = FrameRenderer(renderer.ctx, renderer.programs)
-        self._cached = None
+        self._cached = self._exact = None
         if truth is not None:
             self._cached = CachedReferences(renderer.ctx, renderer.programs, method_class(truth))
+            self._exact = ExactTiles(renderer.ctx, renderer.programs)
         self._last = -math.inf
         self._next = 0
         self._view: tuple | None = None
@@ -304,7 +333,7 @@ class GridMetrics:
         self._queue: list[tuple[str, CachedReference]] = []
         self._found: dict[str, CachedReference] = {}
         self._described: dict[Path, str] = {}
-        self._notes = {"cached": None, "live": None}
+        self._notes = {"cached": None, "exact": None, "live": None}
         self.spent_ms = 0.0
         """Milliseconds the last step took (0 when none ran this frame)."""
 
@@ -317,8 +346,9 @@ class GridMetrics:
         target: moderngl.Framebuffer,
     ) -> None:
         """Call every frame after the grid is drawn, before the UI: notice changes, and when
-        a step is due, look up, measure a tile against a cached reference, or measure one
-        against the reference's tile (from ``target`` as shown).
+        a step is due, look up, measure a tile against a cached reference, take a step of
+        the exact reference's, or measure a tile against the reference's tile (from
+        ``target`` as shown).
 
         Parameters
         ----------
@@ -338,15 +368,18 @@ class GridMetrics:
         if view != self._view:  # moving or edited: the cached numbers no longer hold
             self._view, self._still_since, self._looked_up = view, now, False
             self._queue, self._found, self._described = [], {}, {}
+            self._exact.clear()
             for numbers in state.numbers.values():
                 if numbers.against is not None:
-                    numbers.psnr_db = numbers.flip = numbers.against = None
-            self._notes["cached"] = None
+                    numbers.forget()
+            self._notes["cached"] = self._notes["exact"] = None
         elif now - self._last >= METRICS_INTERVAL_S:
             if not self._looked_up and now - self._still_since >= STILL_S and hub is not None:
                 self._look_up(state, methods, session, hub)
             elif self._queue:
                 self._measure_cached(state, methods, session)
+            elif self._exact.pending:
+                self._measure_exact(state, session)
             elif any(t.name == self.truth for t in state.tiles):
                 self._step(state, methods, session.gpu_scene, session.camera, target)
             else:
@@ -365,6 +398,17 @@ class GridMetrics:
         self._cached.forget()
         self._found = self._cached.find(session, hub, shown, hub, cube)
         self._queue = list(self._found.items())
+        self._exact.start(
+            {
+                t.name: TileRequest(
+                    methods[t.name], self._exact_values(methods[t.name], hub, cube), t.render_size
+                )
+                for t in state.tiles
+                if t.name != self.truth
+                and methods[t.name].reflectance in EXACT_MODELS
+                and min(t.render_size) >= MIN_SIZE
+            }
+        )
         if not self._found:
             self._notes["cached"] = (
                 "no reference saved by compare at this camera (R: the scene's camera)"
@@ -391,6 +435,37 @@ class GridMetrics:
             f"{names}: PSNR, FLIP against the reference compare saved at this camera "
             f"({'; '.join(self._described.values())}), each method rendered at its size, "
             "one sample per pixel"
+        )
+
+    def _exact_values(self, method: Method, hub: Method, cube: int) -> dict[str, object]:
+        """The exact reference's f_λ, k_d and N at ``method``'s tile: the values ``compare``
+        gives the reference of its model (CachedReferences.candidates' first), with the
+        hub's N where the tile's matched N is its round trip (N → b → N)."""
+        values = self._cached.candidates(hub, method, hub, cube)[0]
+        exponent, hub_exponent = float(values["phong_exponent"]), hub.values["phong_exponent"]
+        if math.isclose(exponent, hub_exponent, rel_tol=ROUND_TRIP):
+            exponent = float(hub_exponent)
+        return {"fresnel": values["fresnel"], "kd": values["kd"], "phong_exponent": exponent}
+
+    def _measure_exact(self, state: GridState, session: Session) -> None:
+        measured = self._exact.step(session, session.renderer.display.as_dict())
+        if measured is None:
+            self._notes["exact"] = "evaluating the exact reference…"
+            return
+        name, result = measured
+        numbers = state.numbers.setdefault(name, TileNumbers())
+        numbers.forget()
+        tile = next((t for t in state.tiles if t.name == name), None)
+        if result is None or tile is None:
+            return
+        numbers.psnr_db, numbers.relative_error = result.psnr_db, result.median_relative_error
+        w, h = tile.render_size
+        numbers.against = f"exact {w}×{h}"
+        exact = [n for n, m in state.numbers.items() if m.against and m.against.startswith("exact")]
+        self._notes["exact"] = (
+            f"{', '.join(exact)}: approximation error (median relative error, PSNR) against "
+            f"the exact untraced reference at the tile's size, {self._exact.ssaa}×"
+            f"{self._exact.ssaa} samples a pixel, as compare --reference exact measures"
         )
 
     def _compose(self, state: GridState) -> None:
@@ -423,8 +498,7 @@ class GridMetrics:
         ]
         for tile in state.tiles:
             if tile not in measured and tile.name not in cached:
-                numbers = state.numbers.setdefault(tile.name, TileNumbers())
-                numbers.psnr_db = numbers.flip = None
+                state.numbers.setdefault(tile.name, TileNumbers()).forget()
         if not measured:
             return
         tile = measured[self._next % len(measured)]
@@ -443,10 +517,11 @@ class GridMetrics:
         )
 
     def release(self) -> None:
-        """Free the mask's target and the cached references' objects; safe twice."""
+        """Free the mask's target, the cached and exact references' objects; safe twice."""
         self._mask_renderer.release()
         if self._cached is not None:
             self._cached.release()
+            self._exact.release()
 
 
 def _view_key(
@@ -479,14 +554,19 @@ def _tile_pixels(target: moderngl.Framebuffer, tile: Tile) -> npt.NDArray[np.flo
 
 
 def tile_label(tile: Tile, numbers: TileNumbers | None) -> str:
-    """The label text: the method and its ms per frame; then PSNR and FLIP where measured."""
+    """The label text: the method and its ms per frame; then PSNR and FLIP, or PSNR and the
+    median relative error, where measured."""
     numbers = numbers or TileNumbers()
     if numbers.error:
         return f"{tile.name}: {numbers.error}"
     line = tile.name if numbers.ms is None else f"{tile.name}  {numbers.ms:.1f} ms"
-    if numbers.psnr_db is not None and numbers.flip is not None:
+    if numbers.psnr_db is not None:
         psnr = "inf" if math.isinf(numbers.psnr_db) else f"{numbers.psnr_db:.1f}"
-        line += f"\nPSNR {psnr} dB  FLIP {numbers.flip:.3f}"
+        line += f"\nPSNR {psnr} dB"
+        if numbers.flip is not None:
+            line += f"  FLIP {numbers.flip:.3f}"
+        if numbers.relative_error is not None:
+            line += f"  error {100 * numbers.relative_error:.2f} %"
         if numbers.against:
             line += f"  ({numbers.against})"
     return line
@@ -543,9 +623,10 @@ def grid_section(methods: list[str], state: GridState) -> None:
         state.enter() if on else state.leave()
     imgui.set_item_tooltip(
         "Every method (or the ones ticked below) in tiles under one camera; click a tile to "
-        "show that method alone. Labels: ms per frame; PSNR and FLIP against a reference "
-        "compare saved at this camera (looked up once the view stops changing), else against "
-        "the reference tile while it is one of them."
+        "show that method alone. Labels: ms per frame; once the view stops changing, the "
+        "approximation error (PSNR, median relative error) against the exact reference where "
+        "the model has one, else PSNR and FLIP against a reference compare saved at this "
+        "camera, else against the reference tile while it is one of them."
     )
     if not state.on:
         return

@@ -20,6 +20,7 @@ from envstudio.methods.reference.batch_statistics import (
     standard_error,
 )
 from envstudio.methods.reference.sample_allocation import SampleAllocation
+from envstudio.plugin import PairedEstimates
 
 #: Sums, their squares and the batch: the traced estimate's and, with ``untraced_too``, the
 #: untraced estimate's from the same samples (each RGBA32F, (w, h)).
@@ -39,6 +40,11 @@ class Accumulation:
         RGBA32F, (w, h): the batch in progress (sum of estimates, count).
     untraced : (batch, sum, sum_sq) or None
         The untraced estimate's batch and sums (``untraced_too``), else None.
+    difference_sums : (sum, sum_sq) or None
+        With ``untraced_too``, the sums of each batch's traced mean minus its untraced mean
+        (the control variate's: shaders/reference/merge_difference.glsl), counted from the
+        last :meth:`clear` or :meth:`write_sums` (a resumed accumulation's difference starts
+        afresh: only the batches drawn since hold both), else None.
     batch_fbo : moderngl.Framebuffer or None
         ``batch`` (and the untraced batch) over ``depth``: where estimates are drawn.
     depth_fbo : moderngl.Framebuffer or None
@@ -53,6 +59,7 @@ class Accumulation:
         self.sum_sq: moderngl.Texture | None = None
         self.batch: moderngl.Texture | None = None
         self.untraced: SumTextures | None = None
+        self.difference_sums: tuple[moderngl.Texture, moderngl.Texture] | None = None
         self.batch_fbo: moderngl.Framebuffer | None = None
         self.depth_fbo: moderngl.Framebuffer | None = None
         self.allocation = SampleAllocation.plain((1, 1))
@@ -79,6 +86,7 @@ class Accumulation:
         colours = [self.batch]
         if untraced_too:
             self.untraced = tuple(self.ctx.texture(size, 4, dtype="f4") for _ in range(3))
+            self.difference_sums = tuple(self.ctx.texture(size, 4, dtype="f4") for _ in range(2))
             colours.append(self.untraced[0])
         self.batch_fbo = self.ctx.framebuffer(colours, self._depth)
         self.depth_fbo = self.ctx.framebuffer(depth_attachment=self._depth)
@@ -90,21 +98,32 @@ class Accumulation:
         w, h = self.size
         self._sums_fbo.clear(0.0, 0.0, 0.0, 0.0)
         self.batch_fbo.clear(0.0, 0.0, 0.0, 0.0)
-        for tex in (self.untraced or ())[1:]:
+        for tex in (*(self.untraced or ())[1:], *(self.difference_sums or ())):
             tex.write(np.zeros((h, w, 4), np.float32).tobytes())
         self.set_allocation(SampleAllocation.plain((h, w)))
 
-    def add_batch(self, merge: moderngl.ComputeShader) -> None:
+    def add_batch(
+        self, merge: moderngl.ComputeShader, merge_difference: moderngl.ComputeShader
+    ) -> None:
         """Add the finished batch's mean per pixel (and its square) to the sums; clear it.
 
         ``merge`` is shaders/reference/merge_batch.glsl. With ``untraced_too``
-        the untraced batch is merged into its own sums the same way.
+        the untraced batch is merged into its own sums the same way, and the difference of
+        the two means into :attr:`difference_sums` (``merge_difference``,
+        shaders/reference/merge_difference.glsl).
         """
         self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
+        w, h = self.size
+        if self.difference_sums is not None:
+            self.batch.bind_to_image(0, read=True, write=False)
+            self.difference_sums[0].bind_to_image(1, read=True, write=True)
+            self.difference_sums[1].bind_to_image(2, read=True, write=True)
+            self.untraced[0].bind_to_image(3, read=True, write=False)
+            merge_difference.run((w + 7) // 8, (h + 7) // 8)
+            self.ctx.memory_barrier(moderngl.ALL_BARRIER_BITS)
         sets = [(self.batch, self.sum, self.sum_sq)]
         if self.untraced is not None:
             sets.append(self.untraced)
-        w, h = self.size
         for batch, total, squares in sets:
             batch.bind_to_image(0, read=True, write=False)
             total.bind_to_image(1, read=True, write=True)
@@ -148,6 +167,21 @@ class Accumulation:
         sums = self.read_untraced()
         return None if sums is None else mean_of_batches(sums[0])
 
+    def paired(self) -> PairedEstimates | None:
+        """The traced and untraced estimates with their errors and the error of their
+        difference (:class:`PairedEstimates`); None without ``untraced_too``."""
+        if self.difference_sums is None:
+            return None
+        traced, untraced = self.read(), self.read_untraced()
+        difference = [_read_texture(tex) for tex in self.difference_sums]
+        return PairedEstimates(
+            traced=mean_of_batches(traced[0]),
+            traced_error=standard_error(*traced),
+            untraced=mean_of_batches(untraced[0]),
+            untraced_error=standard_error(*untraced),
+            difference_error=standard_error(*difference),
+        )
+
     def untraced_noise(self) -> float:
         """The untraced estimate's :meth:`noise` (inf without one)."""
         sums = self.read_untraced()
@@ -168,6 +202,8 @@ class Accumulation:
             pairs += list(zip(self.untraced[1:], untraced, strict=True))
         for tex, array in pairs:
             tex.write(np.ascontiguousarray(array[::-1], np.float32).tobytes())
+        for tex in self.difference_sums or ():  # not saved: the difference starts afresh
+            tex.write(np.zeros((*total.shape[:2], 4), np.float32).tobytes())
 
     def reallocate(self, batches: int) -> None:
         """Set each pixel's samples per batch from its standard deviation (Neyman, floored)."""
@@ -189,9 +225,9 @@ class Accumulation:
         for obj in (*targets, self.sum, self.sum_sq, self.batch, self.allocation_texture):
             if obj is not None:
                 obj.release()
-        for tex in self.untraced or ():
+        for tex in (*(self.untraced or ()), *(self.difference_sums or ())):
             tex.release()
-        self.untraced = None
+        self.untraced = self.difference_sums = None
         self.depth_fbo = self.batch_fbo = self._sums_fbo = self._depth = None
         self.sum = self.sum_sq = self.batch = self.allocation_texture = None
 

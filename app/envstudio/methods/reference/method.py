@@ -66,6 +66,7 @@ from envstudio.plugin import (
     FrameInputs,
     GpuScene,
     Method,
+    PairedEstimates,
     is_checkpoint,
     read_shader,
     set_uniform,
@@ -302,7 +303,10 @@ class ReferenceMethod(Method):
 
     def _finish_batch(self) -> None:
         """Merge the batch; check convergence at checkpoints, reallocate at doublings."""
-        self._accumulation.add_batch(self.programs.compute("reference/merge_batch.glsl"))
+        self._accumulation.add_batch(
+            self.programs.compute("reference/merge_batch.glsl"),
+            self.programs.compute("reference/merge_difference.glsl"),
+        )
         status = self.status
         status.batches += 1
         batches = status.batches
@@ -337,6 +341,11 @@ class ReferenceMethod(Method):
         direction sees the environment, nothing blocks or reflects it.
         """
         return self._accumulation.untraced_estimate()
+
+    def paired(self) -> PairedEstimates | None:
+        """The traced and untraced estimates of the same samples (``untraced_too``), with
+        their errors and their difference's, else None: what a control variate needs."""
+        return self._accumulation.paired()
 
     def untraced_relative_standard_error(self) -> float:
         """The untraced estimate's noise, as :meth:`relative_standard_error` (inf without one)."""
