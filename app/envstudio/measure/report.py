@@ -460,11 +460,11 @@ def _run_line(ref: ReferenceRun) -> str:
     state = "converged" if ref.converged else "NOT converged"
     if ref.control_variate:
         return (
-            f"control variate: the exact untraced reference plus traced − untraced sampled, "
+            f"control variate: traced, less β × (its untraced estimate − the exact one), "
             f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s); "
             f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: "
-            f"{STOPPED_BY[ref.stopped_by]}; noise (median relative standard error of the "
-            f"difference over the estimate) {_percent(ref.relative_standard_error)}"
+            f"{STOPPED_BY[ref.stopped_by]}; noise (median relative standard error) "
+            f"{_percent(ref.relative_standard_error)}"
         )
     half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
     limit = float(ref.parameters.get("time_limit", 0.0))
