@@ -67,6 +67,15 @@ EXCLUDES = (
     "PySide6",
     "pyglet",
     "imgui_bundle.demos_python",
+    # the documentation's tooling (the `dev` extra): babel's messages pull in pkg_resources,
+    # whose runtime hook needs setuptools' vendored packages, which the bundle leaves out
+    "sphinx",
+    "sphinx_gallery",
+    "docutils",
+    "babel",
+    "numpydoc",
+    "myst_parser",
+    "pkg_resources",
 )
 # The machine's own: GL drivers (Mesa's libEGL and LLVM, a GPU's libGL) load into the process and
 # need the system's C++ runtime, which is at least as new as the build machine's; a bundled older

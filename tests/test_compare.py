@@ -513,7 +513,7 @@ def test_on_a_convex_sphere_the_scene_only_error_is_noise_and_approximation_is_s
     out = tmp_path / "decomposed"
     args = ["--size", "24x24", "--frames", "2", "--warmup", "1", "--methods", "mirror"]
     narrow = ["--param", "phong_exponent=200", "--param", "trace=true", "--param", "kd=0"]
-    budget = ["--param", "max_samples=1024"]
+    budget = ["--param", "max_samples=1024", "--reference", "montecarlo"]
     command = ["compare", "--scene", str(small_scene), "--out", str(out), *args, *narrow, *budget]
     assert main(command) == 0
     report = json.loads((out / "compare.json").read_text())
