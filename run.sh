@@ -2,6 +2,7 @@
 # Set up envmap-studio on this machine (once; later runs reuse it) and run it.
 #   ./run.sh view [ARGS...]   set up, then open the viewer (default scene)
 #   ./run.sh test             set up, then ruff check, ruff format --check, pytest
+#   ./run.sh docs             set up, then build the documentation site into docs/_build/html
 #   ./run.sh envstudio ARGS   set up, then any envstudio subcommand
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -73,6 +74,11 @@ case "$command" in
         .venv/bin/ruff format --check .
         .venv/bin/lint-imports
         OPENBLAS_NUM_THREADS=1 exec .venv/bin/pytest -q "$@" ;;
+    docs)
+        # a fresh build (-E): the technique pages and the gallery come from today's code; both
+        # render through EGL, and without it docs/conf.py stops in one line
+        .venv/bin/sphinx-build -b html -E -W --keep-going -q "$@" docs docs/_build/html
+        echo "$PWD/docs/_build/html/index.html" ;;
     envstudio) exec .venv/bin/envstudio "$@" ;;
-    *) echo "run.sh: unknown command '$command' (expected view, test or envstudio)" >&2; exit 2 ;;
+    *) echo "run.sh: unknown command '$command' (expected view, test, docs or envstudio)" >&2; exit 2 ;;
 esac

@@ -1,0 +1,299 @@
+"""What the envmap-studio site builds from the code: technique pages, links into the
+checkout, the gallery's image scraper and the EGL check.
+
+- ``{envstudio-method} NAME``: a method's page body from the registry
+  (``envstudio.engine.registry.available_methods()`` and the class's ``describe()``):
+  its paper, summary, reflectance model, a parameter table, and its paragraph of
+  ``docs/methods.md``.
+- ``{envstudio-methods}``: the table of every registered method, linked to its page.
+- ``{checkout}`text <path>```: a link to a file of the checkout outside the site
+  (``studies/``, ``examples/``), relative to the built page; a missing file is a warning.
+- :func:`scraper`: sphinx-gallery's custom image scraper, saving every image that
+  ``envstudio.show`` displayed while a block ran (enlarged by whole pixels to at least
+  :data:`MIN_WIDTH`: the gallery renders at 64×64 to stay fast).
+- :func:`check_context`: one line and exit status 2 when no OpenGL context can be made,
+  before the gallery runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+from docutils import nodes
+from docutils.statemachine import StringList
+from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
+
+ROOT = Path(os.environ.get("ENVSTUDIO_CHECKOUT", Path(__file__).resolve().parents[2]))
+LOGGER = logging.getLogger(__name__)
+
+# ---------------------------------------------------------------- the EGL check
+
+
+def check_context() -> None:
+    """Exit with one line (status 2) when no headless OpenGL context can be made: the gallery
+    renders through EGL, and a traceback per example says less than envstudio's own line."""
+    from envstudio.errors import ContextError
+    from envstudio.gpu.context import create_headless_context
+
+    try:
+        ctx = create_headless_context()
+    except ContextError as error:
+        sys.stderr.write(f"docs: the gallery needs OpenGL: {error}\n")
+        sys.stderr.flush()
+        os._exit(2)  # Sphinx would wrap a SystemExit from conf.py in a configuration error
+    ctx.release()
+
+
+# ---------------------------------------------------------------- the gallery scraper
+
+_SHOWN: list = []
+MIN_WIDTH = 384  # shown images narrower than this are enlarged by whole pixels
+
+
+def _record_show() -> None:
+    """Wrap ``envstudio.api.show`` so that what it returns is remembered for the scraper."""
+    from envstudio import api
+
+    if getattr(api.show, "_recorded", False):
+        return
+    show = api.show
+
+    def recorded_show(*args, **kwargs):
+        image = show(*args, **kwargs)
+        _SHOWN.append(image)
+        return image
+
+    recorded_show.__doc__ = show.__doc__
+    recorded_show._recorded = True
+    api.show = recorded_show
+
+
+def reset_shown(gallery_conf, fname) -> None:
+    """sphinx-gallery's ``reset_modules`` hook: forget images left by an earlier example."""
+    _record_show()
+    _SHOWN.clear()
+
+
+def scraper(block, block_vars, gallery_conf) -> str:
+    """sphinx-gallery's custom image scraper: save what ``es.show`` displayed in this block as
+    PNGs at the paths sphinx-gallery hands out, and return their reST."""
+    from PIL import Image
+    from sphinx_gallery.scrapers import figure_rst
+
+    paths = []
+    iterator = block_vars["image_path_iterator"]
+    for shown in _SHOWN:
+        path = next(iterator)
+        picture = Image.fromarray(np.ascontiguousarray(shown.pixels))
+        scale = max(1, -(-MIN_WIDTH // picture.width))  # the gallery renders tiny frames
+        if scale > 1:
+            picture = picture.resize(
+                (picture.width * scale, picture.height * scale), Image.Resampling.NEAREST
+            )
+        picture.save(path)
+        paths.append(path)
+    _SHOWN.clear()
+    return figure_rst(paths, gallery_conf["src_dir"])
+
+
+# ---------------------------------------------------------------- links into the checkout
+
+
+def checkout_role(name, rawtext, text, lineno, inliner, options=None, content=None):
+    """``{checkout}`label <path>```: the checkout's file ``path`` (relative to its root),
+    linked relative to the built page so the link works in the local build."""
+    match = re.fullmatch(r"\s*(.*?)\s*<([^>]+)>\s*", text, re.S)
+    label, target = (match.group(1), match.group(2)) if match else (text, text)
+    path, _, anchor = target.partition("#")
+    env = inliner.document.settings.env
+    messages = []
+    if not (ROOT / path).exists():
+        messages.append(inliner.reporter.warning(f"checkout file not found: {path}", line=lineno))
+    page_dir = Path(env.app.outdir) / Path(env.docname).parent
+    uri = os.path.relpath(ROOT / path, page_dir).replace(os.sep, "/")
+    if (ROOT / path).is_dir():
+        uri += "/"
+    if anchor:
+        uri += "#" + anchor
+    node = nodes.reference(rawtext, label or path, refuri=uri)
+    return [node], messages
+
+
+_OUTSIDE_LINK = re.compile(r"\[([^\]]+)\]\(\.\./((?:studies|examples)/[^)\s]*)\)")
+
+
+def outside_links(markdown: str) -> str:
+    """Markdown links from ``docs/`` to ``../studies`` and ``../examples`` as ``{checkout}``
+    roles (MyST would look for them among the site's pages)."""
+    return _OUTSIDE_LINK.sub(
+        lambda m: f"{{checkout}}`{m.group(1).strip('`')} <{m.group(2)}>`", markdown
+    )
+
+
+def rewrite_outside_links(app, docname, source) -> None:
+    """``source-read``: rewrite the links of the kept Markdown files (plugins.md)."""
+    source[0] = outside_links(source[0])
+
+
+# ---------------------------------------------------------------- technique pages
+
+
+def _methods():
+    from envstudio.engine.registry import available_methods
+
+    return available_methods()
+
+
+def method_paragraphs() -> dict[str, str]:
+    """Each method's hand-written paragraph: its row of docs/methods.md's table."""
+    rows = {}
+    text = (ROOT / "docs" / "methods.md").read_text(encoding="utf-8")
+    for line in text.splitlines():
+        match = re.match(r"\| `([a-z0-9_]+)` \| (.*) \|$", line)
+        if match:
+            rows[match.group(1)] = outside_links(match.group(2))
+    return rows
+
+
+def _cell(value: object) -> str:
+    text = str(value).replace("|", "\\|").replace("\n", " ")
+    return text.replace("<", "\\<").replace("*", "\\*")
+
+
+def _range(parameter: dict) -> str:
+    if parameter.get("choices"):
+        return ", ".join(f"`{c}`" for c in parameter["choices"])
+    if parameter["kind"] == "bool":
+        return "on / off"
+    if parameter["kind"] == "path":
+        suffixes = parameter.get("suffixes") or ()
+        return "a file " + ", ".join(f"`{s}`" for s in suffixes) if suffixes else "a file"
+    low, high = parameter.get("minimum"), parameter.get("maximum")
+    if low is None and high is None:
+        return ""
+    return f"{low:g} … {high:g}" if low is not None and high is not None else ""
+
+
+def _default(parameter: dict) -> str:
+    value = parameter["default"]
+    if isinstance(value, list):
+        return ", ".join(f"{v:g}" for v in value)
+    if value == "":
+        return "(none)"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+# the shipped scene that shows a method best (default studio), and what its picture needs
+PICTURE_SCENES = {"banks": "brushed", "pem": "room", "parallax": "room"}
+PICTURE_PARAMETERS = {"pem": {"coverage": "file"}, "reference": {"max_samples": 128}}
+PICTURE_SIZE = (128, 128)
+
+
+def picture_command(name: str) -> str:
+    """The ``envstudio render`` command that draws a technique page's picture."""
+    scene = PICTURE_SCENES.get(name, "studio")
+    params = "".join(f" --param {k}={v}" for k, v in PICTURE_PARAMETERS.get(name, {}).items())
+    size = "x".join(str(n) for n in PICTURE_SIZE)
+    return f"envstudio render --scene {scene} --method {name}{params} --size {size} -o {name}.png"
+
+
+def render_picture(name: str, srcdir: Path) -> str:
+    """Render the technique page's picture through the Python API into the sources'
+    ``_generated/`` folder; its path for the image directive (relative to the sources)."""
+    from PIL import Image
+
+    import envstudio as es
+
+    scene = es.load_scene(PICTURE_SCENES.get(name, "studio"))
+    with contextlib.redirect_stderr(io.StringIO()):  # the reference's progress line
+        frame = es.render(scene, name, size=PICTURE_SIZE, **PICTURE_PARAMETERS.get(name, {}))
+    path = srcdir / "_generated" / "techniques" / f"{name}.png"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(es.display(frame)).save(path)
+    return f"/_generated/techniques/{name}.png"
+
+
+def method_markdown(name: str, picture: str | None = None) -> list[str]:
+    """The generated part of a technique page, as MyST Markdown lines."""
+    cls = _methods()[name]
+    described = cls.describe()
+    paragraph = method_paragraphs().get(name)
+    lines = [f"**{described['summary']}**", ""]
+    if picture:
+        lines += [f"```{{image}} {picture}", f":alt: {name}", "```", ""]
+    lines += [
+        "| | |",
+        "| --- | --- |",
+        f"| paper | {_cell(described['paper'])} |",
+        f"| reflectance model | `{described['reflectance']}` |",
+        f"| the picture above | `{picture_command(name)}` |",
+        "",
+    ]
+    if paragraph:
+        lines += ["## In detail", "", paragraph, ""]
+    lines += [
+        "## Parameters",
+        "",
+        "Set with `--param NAME=VALUE` on the command line, or as keyword arguments of "
+        "`es.render`; generated from the method's declarations (`envstudio methods`).",
+        "",
+        "| parameter | kind | range | default | unit | what it does |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for p in described["parameters"]:
+        lines.append(
+            f"| `{p['name']}` | {p['kind']} | {_cell(_range(p))} | {_cell(_default(p))} "
+            f"| {_cell(p.get('unit', ''))} | {_cell(p.get('help', ''))} |"
+        )
+    return lines
+
+
+class _MarkdownDirective(SphinxDirective):
+    """Parse generated MyST lines into the page at the directive."""
+
+    def parse(self, lines: list[str]) -> list[nodes.Node]:
+        container = nodes.container()
+        self.state.nested_parse(StringList(lines, source=self.env.docname), 0, container)
+        return container.children
+
+
+class MethodDirective(_MarkdownDirective):
+    """``{envstudio-method} NAME``: the registry's description of one method."""
+
+    required_arguments = 1
+
+    def run(self):
+        name = self.arguments[0]
+        if name not in _methods():
+            raise self.error(f"envstudio-method: no registered method {name!r}")
+        picture = render_picture(name, Path(self.env.srcdir))
+        return self.parse(method_markdown(name, picture))
+
+
+class MethodsDirective(_MarkdownDirective):
+    """``{envstudio-methods}``: every registered method, linked to its page."""
+
+    def run(self):
+        lines = ["| method | paper | reflectance | what it does |", "| --- | --- | --- | --- |"]
+        for name, cls in _methods().items():
+            d = cls.describe()
+            lines.append(
+                f"| {{doc}}`{_cell(d['title'])} </techniques/{name}>` | {_cell(d['paper'])} "
+                f"| `{d['reflectance']}` | {_cell(d['summary'])} |"
+            )
+        return self.parse(lines)
+
+
+def setup(app):
+    app.add_role("checkout", checkout_role)
+    app.add_directive("envstudio-method", MethodDirective)
+    app.add_directive("envstudio-methods", MethodsDirective)
+    app.connect("source-read", rewrite_outside_links)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
