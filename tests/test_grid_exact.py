@@ -7,9 +7,10 @@ import pytest
 
 from envstudio.engine.grid_view import tile_layout
 from envstudio.engine.session import RenderSession
-from envstudio.measure.compare import EXACT, method_classes, plan_parameters, run_comparison
+from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.exact_tiles import SSAA
 from envstudio.measure.matching import GlossinessLink
+from envstudio.measure.reference_runs import EXACT
 from envstudio.ui.grid import GridMetrics, GridState, tile_label
 from test_reference_cache import _gradient
 from test_render_gl import sphere_scene

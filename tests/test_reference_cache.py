@@ -14,9 +14,10 @@ from envstudio.errors import ParameterError
 from envstudio.gpu.programs import read_shader
 from envstudio.measure import ground_truth_cache
 from envstudio.measure.cached_reference import CachedReferences
-from envstudio.measure.compare import MONTE_CARLO, method_classes, plan_parameters, run_comparison
+from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.ground_truth_cache import cache_limit_bytes, load_state, prune, save_state
 from envstudio.measure.matching import GlossinessLink
+from envstudio.measure.reference_runs import MONTE_CARLO
 from envstudio.methods.reference import method as reference_method
 from envstudio.scene.environment import Environment
 from envstudio.ui.grid import GridMetrics, GridState, tile_label

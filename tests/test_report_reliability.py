@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from envstudio.core.metrics import ImageMetrics
-from envstudio.measure.compare import Comparison, MethodResult, ReferenceRun
+from envstudio.measure.compare import Comparison, MethodResult
 from envstudio.measure.ground_truth import ConvergenceStatus
+from envstudio.measure.reference_runs import ReferenceRun
 from envstudio.measure.report import format_table, to_html, to_json, write_report
 
 SIZE = (4, 3)

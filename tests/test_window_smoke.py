@@ -514,8 +514,9 @@ def test_the_grids_labels_give_compares_exact_numbers_in_the_window(xvfb, tmp_pa
     """Issue 40 item 5: in the real window, once the view stays still, the hwconv and mirror
     tiles' labels give their error against the exact reference, and the numbers equal
     compare's (--reference exact, trace=false, the tile's size and the grid's ssaa)."""
-    from envstudio.measure.compare import EXACT, method_classes, plan_parameters, run_comparison
+    from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
     from envstudio.measure.exact_tiles import SSAA
+    from envstudio.measure.reference_runs import EXACT
 
     config = tmp_path / "config"
     config.mkdir()

@@ -280,12 +280,12 @@ def compare(
     """
     from envstudio.core.metrics import MIN_SIZE
     from envstudio.measure.compare import (
-        REFERENCE_KINDS,
         check_ssaa,
         method_classes,
         plan_parameters,
         run_comparison,
     )
+    from envstudio.measure.reference_runs import REFERENCE_KINDS
     from envstudio.measure.report import to_json
 
     check.scene(scene)

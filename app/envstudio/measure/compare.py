@@ -45,19 +45,14 @@ Reliability
 
 from __future__ import annotations
 
-import contextlib
 import sys
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-from tqdm import tqdm
 
-from envstudio.core.env_sampling import LUMINANCE
-from envstudio.core.images import displayed
 from envstudio.core.metrics import ImageMetrics, compare_images, relative_error
 from envstudio.core.parameters import parse_assignments
 from envstudio.engine.display import DISPLAY_PARAMETERS
@@ -66,39 +61,29 @@ from envstudio.engine.registry import ground_truth_class, method_class
 from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
-from envstudio.measure import ground_truth_cache
 from envstudio.measure.bench import run_bench
-from envstudio.measure.exact_reference import EXACT_MODELS, CheckedError, exact_frame
+from envstudio.measure.exact_reference import EXACT_MODELS
 from envstudio.measure.ground_truth import (
     SCENE_EFFECTS,
     UNTRACED_TOO,
-    ConvergenceStatus,
     GroundTruth,
 )
 from envstudio.measure.matching import match_glossiness, match_roughness
+from envstudio.measure.reference_runs import (
+    EXACT,
+    ReferenceRun,
+    converge,
+    display_image,
+    exact_run,
+    untraced_run,
+)
 from envstudio.measure.stopping import (
-    NOISE_RULE,
     NOISE_SHARE,
-    TOLERANCE_RULE,
     ReferenceJudge,
     choose_rule,
-    duration,
     median_error,
 )
 
-STOPPED_BY = {
-    "reliable": "every method reliable",
-    "converged": "converged",
-    "max_samples": "sample budget spent",
-    "time_limit": "time limit reached",
-    "exact": "evaluated exactly (no sampling)",
-}
-"""What ends the reference's accumulation, as :attr:`ReferenceRun.stopped_by` names it."""
-EXACT = "exact"
-MONTE_CARLO = "montecarlo"
-REFERENCE_KINDS = (EXACT, MONTE_CARLO)
-"""``--reference``: the exact untraced reference where the model has one
-(measure/exact_reference.py), or Monte Carlo throughout."""
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
 """Parameters listed as "matched" in the report when a method declares them."""
 
@@ -148,124 +133,6 @@ def check_ssaa(ssaa: object, size: tuple[int, int], name: str = "ssaa") -> None:
         raise ParameterError(
             f"{name} {ssaa!r}: expected an integer in 1..{MAX_SSAA} with "
             f"{name} x {edge} <= {MAX_SSAA_EDGE} pixels"
-        )
-
-
-@dataclass
-class ReferenceRun:
-    """The converged (or budget-limited) reference.
-
-    Attributes
-    ----------
-    parameters : dict
-        Its parameter values.
-    status : ConvergenceStatus
-        Samples per pixel, last successive-half change, converged.
-    frames_ms : list of float
-        Wall time of each accumulation frame, ms.
-    total_s : float
-        Wall time from the first frame to the last, s.
-    relative_standard_error : float
-        Median over the mask of the luminance standard error over the luminance
-        of the estimate (channel errors added: an upper bound).
-    resumed_samples : int
-        Samples per pixel taken over from a saved accumulation (0 when it
-        started afresh; ``frames_ms`` and ``total_s`` count this run only).
-    hdr : (h, w, 3) float32
-        Linear radiance of the frame.
-    display : (h, w, 3) float32
-        The frame as displayed, in [0, 1].
-    stopping_rule : str
-        ``noise`` (the default) or ``tolerance`` (strict), measure/stopping.py.
-    stopped_by : str
-        A key of :data:`STOPPED_BY`: what ended the accumulation.
-    wall_s : float
-        Wall time of this run's accumulation, s (what ``time_limit`` counts:
-        ``total_s`` plus the time between frames).
-    exact_error : CheckedError or None
-        For an exact run (measure/exact_reference.py), its checked relative error against
-        the brute force, median and largest (``relative_standard_error`` holds the median:
-        what the methods' reliability is judged by); None for a Monte Carlo run.
-    control_variate : bool
-        A traced run estimated as the exact untraced reference plus the sampled difference
-        traced − untraced (:func:`_control_variate`): ``hdr`` and the noise are that
-        estimate's.
-    """
-
-    parameters: dict[str, object]
-    status: ConvergenceStatus
-    frames_ms: list[float]
-    total_s: float
-    relative_standard_error: float
-    resumed_samples: int
-    hdr: npt.NDArray[np.float32]
-    display: npt.NDArray[np.float32]
-    stopping_rule: str = TOLERANCE_RULE
-    stopped_by: str = "converged"
-    wall_s: float = 0.0
-    exact_error: CheckedError | None = None
-    control_variate: bool = False
-
-    @property
-    def converged(self) -> bool:
-        """The successive-half change fell below the tolerance within the budget."""
-        return self.status.converged
-
-    @property
-    def unreliable_reason(self) -> str | None:
-        """Why marked metrics cannot be trusted, or None when the reference converged."""
-        if self.converged:
-            return None
-        if self.exact_error is not None:
-            checked = self.exact_error
-            return (
-                f"the exact reference's checked error (median {100 * checked.median:.3g} %, "
-                f"largest {100 * checked.largest:.3g} % against the brute force) is not below "
-                f"{NOISE_SHARE:g} of the marked methods' median relative error"
-            )
-        # batches of one Sobol sequence are negatively correlated: their spread overstates
-        bound = (
-            ", an upper bound under sequence=sobol"
-            if self.parameters.get("sequence") == "sobol"
-            else ""
-        )
-        return (
-            f"{self._stop_text()} and its median relative standard error "
-            f"({100 * self.relative_standard_error:.3g} %{bound}) is not below "
-            f"{NOISE_SHARE:g} of the marked methods' median relative error, so its Monte Carlo "
-            f"noise is part of their metrics ({self._advice()})"
-        )
-
-    def _stop_text(self) -> str:
-        """How the reference stopped short, with the half-change under the tolerance rule."""
-        if self.stopped_by == "time_limit":
-            text = (
-                f"the reference reached its time limit of {float(self.parameters['time_limit']):g}"
-                " s before it converged"
-            )
-        else:
-            text = (
-                f"the reference did not converge within max_samples="
-                f"{self.parameters['max_samples']} spp"
-            )
-        if self.stopping_rule != TOLERANCE_RULE:
-            return text
-        change = self.status.rms_change
-        measured = (
-            "no convergence check yet (fewer than 2 frames)"
-            if change is None
-            else f"half-change {100 * change:.3g} % > tolerance "
-            f"{100 * float(self.parameters['tolerance']):.3g} %"
-        )
-        return f"{text} ({measured})"
-
-    def _advice(self) -> str:
-        """What to raise to get reliable numbers."""
-        raised = "--time-limit" if self.stopped_by == "time_limit" else "max_samples"
-        return (
-            f"raise {raised} or tolerance"
-            if self.stopping_rule == TOLERANCE_RULE
-            else (f"raise {raised}")
         )
 
 
@@ -559,13 +426,13 @@ def run_comparison(
             )
         background = next((rendered[n][2] for n in members if n in rendered), None)
         if exact and not traces:  # the untraced model is the reference: nothing to sample
-            runs[model], mask = _exact_run(session, reference, size, ssaa, background)
+            runs[model], mask = exact_run(session, reference, size, ssaa, background)
             continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
         if exact and traces:  # a control variate: traced = exact untraced + sampled difference
-            known, known_mask = _exact_run(session, reference, size, ssaa, background)
+            known, known_mask = exact_run(session, reference, size, ssaa, background)
             reference.values[UNTRACED_TOO] = True
-            runs[model], mask = _converge(
+            runs[model], mask = converge(
                 session, reference, size, progress, False, judge, control=(known.hdr, known_mask)
             )
             if decompose:
@@ -577,9 +444,9 @@ def run_comparison(
         shared = decompose and traces
         if shared:  # the untraced estimate from the same samples
             reference.values[UNTRACED_TOO] = True
-        runs[model], mask = _converge(session, reference, size, progress, cache, judge)
+        runs[model], mask = converge(session, reference, size, progress, cache, judge)
         if shared:
-            untraced[model] = _untraced_run(session, reference, runs[model], mask)
+            untraced[model] = untraced_run(session, reference, runs[model], mask)
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
     model_of[truth] = first
@@ -728,7 +595,7 @@ def _render_method(
     if ssaa > 1:
         covered = session.renderer.reflector_coverage(session.gpu_scene, session.camera, fine)
         hdr = footprint_filter(hdr, covered, ssaa)
-    return method, glossiness, hdr, _display_image(session, hdr)
+    return method, glossiness, hdr, display_image(session, hdr)
 
 
 def footprint_filter(
@@ -780,229 +647,6 @@ def _judge(
     return result
 
 
-def _converge(
-    session: RenderSession,
-    reference: GroundTruth,
-    size: tuple[int, int],
-    progress: bool,
-    cache: bool,
-    judge: ReferenceJudge,
-    control: tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]] | None = None,
-) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
-    """Accumulate until ``judge``'s rule or the reference stops it; the run and the mask.
-
-    Resumed and saved with ``cache``. With ``control`` (the exact untraced frame and its
-    mask, the reference accumulating ``untraced_too``) the image judged and returned is the
-    control variate's (:func:`_control_variate`). Raises on an empty mask.
-    """
-    frames_ms: list[float] = []
-    checkpoint = ground_truth_cache.Checkpoint(session, reference, size) if cache else None
-    with (
-        tqdm(
-            desc=reference.name,
-            unit="frame",
-            file=sys.stderr,
-            disable=not progress,
-            bar_format="{desc}: {elapsed}{postfix}",
-        ) as bar,
-        checkpoint.saved_on_interrupt() if checkpoint else contextlib.nullcontext(),
-    ):
-        frames_ms.append(_timed_frame(session, reference, size))
-        mask = _reflector_mask(session, reference)
-        while True:
-            if judge.due(reference.status.batches):
-                if control is None:
-                    judge.judge(reference, session.read_hdr(), mask)
-                else:
-                    judge.judge(reference, *_control_variate(session, reference, control, mask))
-            if progress:
-                bar.set_postfix_str(_progress_line(reference, judge), refresh=False)
-                bar.update()
-            if reference.finished() or judge.satisfied():
-                break
-            frames_ms.append(_timed_frame(session, reference, size))
-            if checkpoint:
-                checkpoint.save_if_due()
-    wall_s = reference.status.run_elapsed()
-    resumed = 0
-    if checkpoint:
-        checkpoint.save()
-        resumed = checkpoint.resumed_samples
-    if resumed:
-        print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
-    stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
-    if control is None:
-        hdr, noise = session.read_hdr(), reference.relative_standard_error()
-    else:
-        hdr, _, noise = _control_variate(session, reference, control, mask)
-    print(f"reference: {_stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
-    run = ReferenceRun(
-        parameters=reference.values.as_dict(),
-        status=replace(reference.status),
-        frames_ms=frames_ms,
-        total_s=sum(frames_ms) / 1e3,
-        relative_standard_error=noise,
-        resumed_samples=resumed,
-        hdr=hdr,
-        display=_display_image(session, hdr),
-        stopping_rule=judge.rule,
-        stopped_by=stopped_by,
-        wall_s=wall_s,
-        control_variate=control is not None,
-    )
-    return run, mask
-
-
-def _control_variate(
-    session: RenderSession,
-    reference: GroundTruth,
-    control: tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]],
-    mask: npt.NDArray[np.bool_],
-) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_], float]:
-    """The traced reference with the untraced estimate of the same samples as its control
-    variate (ground_truth.PairedEstimates.controlled): T − β (U − exact untraced).
-
-    Both Monte Carlo estimates come from the same samples, so where the scene adds little
-    (occlusion, local and self-reflections) T and U vary together and only what it adds is
-    left to sample: nothing where nothing is traced. Unbiased up to the exact reference's
-    stated error and the footprint (the exact one's samples are the methods' grid, the
-    sampled ones random points of the footprint); β per pixel, so never noisier than T.
-
-    Returns
-    -------
-    hdr : (h, w, 3) float32
-        The control-variate estimate on the pixels the exact run covers, the plain traced
-        estimate elsewhere (a silhouette pixel only the traced footprint reaches).
-    mask : (h, w) bool
-        ``mask``, as judged.
-    noise : float
-        Median over ``mask`` of the estimate's luminance standard error over its luminance
-        (channel errors added: an upper bound, as the reference's).
-    """
-    exact, covered = control[0], control[1][..., None]
-    estimate, error = reference.paired().controlled(exact)
-    hdr = np.where(covered, estimate, session.read_hdr()).astype(np.float32)
-    luminance = hdr[mask] @ LUMINANCE
-    spread = np.where(covered, error, np.inf)[mask] @ LUMINANCE
-    lit = luminance > 0
-    noise = float(np.median(spread[lit] / luminance[lit])) if lit.any() else float("inf")
-    return hdr, mask, noise
-
-
-def _exact_run(
-    session: RenderSession,
-    reference: GroundTruth,
-    size: tuple[int, int],
-    ssaa: int,
-    background: npt.NDArray[np.float32] | None,
-) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
-    """The untraced model evaluated exactly at ``ssaa``² samples a pixel (exact_reference.py),
-    as a run, and its mask; off the reflectors ``background`` (a method's frame) or black.
-
-    Raises
-    ------
-    ParameterError
-        If the camera sees no reflector (empty mask).
-    """
-    started = time.perf_counter()
-    fine = (size[0] * ssaa, size[1] * ssaa)
-    normals, views = session.renderer.reflector_surface(session.gpu_scene, session.camera, fine)
-    frame = exact_frame(
-        normals,
-        views,
-        session.scene.environment.radiance,
-        reference.values.as_dict(),
-        ssaa,
-        started,
-    )
-    if not frame.mask.any():
-        _empty_mask(session)
-    outside = np.zeros_like(frame.hdr) if background is None else background
-    hdr = np.where(frame.mask[..., None], frame.hdr, outside).astype(np.float32)
-    checked = frame.error
-    print(
-        f"reference: exact in {frame.seconds:.2f} s; against the brute force at "
-        f"{checked.samples} samples: median {100 * checked.median:.2g} %, largest "
-        f"{100 * checked.largest:.2g} %",
-        file=sys.stderr,
-    )
-    run = ReferenceRun(
-        parameters=reference.values.as_dict(),
-        status=ConvergenceStatus(),
-        frames_ms=[1e3 * frame.seconds],
-        total_s=frame.seconds,
-        relative_standard_error=checked.median,
-        resumed_samples=0,
-        hdr=hdr,
-        display=_display_image(session, hdr),
-        stopping_rule=EXACT,
-        stopped_by=EXACT,
-        wall_s=frame.seconds,
-        exact_error=frame.error,
-    )
-    return run, frame.mask
-
-
-def _untraced_run(
-    session: RenderSession, reference: GroundTruth, traced: ReferenceRun, mask
-) -> ReferenceRun:
-    """The untraced estimate the traced run accumulated from the same samples, as a run."""
-    hdr = np.where(mask[..., None], reference.untraced_estimate(), traced.hdr).astype(np.float32)
-    return replace(
-        traced,
-        parameters=traced.parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
-        relative_standard_error=reference.untraced_relative_standard_error(),
-        hdr=hdr,
-        display=_display_image(session, hdr),
-    )
-
-
-def _reflector_mask(session: RenderSession, reference: GroundTruth) -> npt.NDArray[np.bool_]:
-    """The reference's coverage after its first frame.
-
-    Raises
-    ------
-    ParameterError
-        If it is empty: the camera sees no reflector.
-    """
-    mask = reference.coverage()
-    if not mask.any():
-        _empty_mask(session)
-    return mask
-
-
-def _empty_mask(session: RenderSession) -> None:
-    """Raise the one line for a camera that sees no reflector."""
-    camera = session.camera
-    raise ParameterError(
-        f"camera at azimuth {camera.azimuth:g}°, elevation {camera.elevation:g}°, "
-        f"distance {camera.distance:g} sees no reflector (empty mask): nothing to compare"
-    )
-
-
-def _stop_line(reference: GroundTruth, noise: float, wall_s: float, stopped_by: str) -> str:
-    """Where the reference stopped: samples, time, noise, half-change, and why."""
-    status = reference.status
-    change = "—" if status.rms_change is None else f"{100 * status.rms_change:.3g} %"
-    state = "converged" if status.converged else "NOT converged"
-    noise_text = f"{100 * noise:.3g} %" if np.isfinite(noise) else "—"
-    return (
-        f"{status.samples} spp in {wall_s:.1f} s, noise {noise_text}, half-change {change} "
-        f"({state}); stopped: {STOPPED_BY[stopped_by]}"
-    )
-
-
-def _progress_line(reference: GroundTruth, judge: ReferenceJudge) -> str:
-    """The reference's status and, once judged, the noise, every method's error and time left."""
-    line = judge.progress_line()
-    if judge.rule != NOISE_RULE or not line:
-        return f"{reference.status_line()}; {line}" if line else reference.status_line()
-    limit = float(reference.values["time_limit"])
-    if limit > 0:
-        line += f"; time limit in {duration(limit - reference.status.run_elapsed())}"
-    return f"{reference.status.samples} spp, {line}"
-
-
 def _time_methods(
     session: RenderSession, names: list[str], size: tuple[int, int], frames: int, warmup: int
 ) -> dict[str, tuple[dict[str, float], str]]:
@@ -1014,22 +658,6 @@ def _time_methods(
     return {name: (report["methods"][name]["frame"], how) for name in names}
 
 
-def _timed_frame(session: RenderSession, method: Method, size: tuple[int, int]) -> float:
-    """Render one frame; its wall time in ms with ``finish()`` at both ends (as bench)."""
-    session.ctx.finish()
-    start = time.perf_counter()
-    session.render_offscreen(method, size)
-    session.ctx.finish()
-    return (time.perf_counter() - start) * 1e3
-
-
 def _summary(samples: list[float]) -> dict[str, float]:
     values = np.asarray(samples, dtype=np.float64)
     return {"median_ms": float(np.median(values)), "p95_ms": float(np.percentile(values, 95))}
-
-
-def _display_image(session: RenderSession, hdr: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
-    """(h, w, 3) float32 display values of linear ``hdr`` with the session's display settings
-    (core/images.py's twin of the display shader), unquantised, in [0, 1]."""
-    display = session.renderer.display
-    return displayed(hdr, float(display["exposure"]), str(display["tonemap"])).astype(np.float32)

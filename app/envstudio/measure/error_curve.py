@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 from envstudio.engine.registry import method_class
 from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError, UserError
-from envstudio.measure.compare import EXACT, method_classes, plan_parameters, run_comparison
+from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.exact_reference import EXACT_MODELS
+from envstudio.measure.reference_runs import EXACT
 
 
 @dataclass

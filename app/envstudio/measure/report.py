@@ -50,7 +50,8 @@ from envstudio.engine.registry import ground_truth_class
 from envstudio.engine.split_view import SplitSettings
 from envstudio.io.atomic import check_output_folder, write_text_atomic
 from envstudio.io.images import write_image
-from envstudio.measure.compare import STOPPED_BY, Comparison, MethodResult, ReferenceRun
+from envstudio.measure.compare import Comparison, MethodResult
+from envstudio.measure.reference_runs import STOPPED_BY, ReferenceRun
 from envstudio.measure.stopping import NOISE_RULE, NOISE_SHARE
 
 HEAT_SCALE = SplitSettings().heat_scale
