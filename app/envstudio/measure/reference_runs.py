@@ -55,6 +55,11 @@ REFERENCE_KINDS = (EXACT, MONTE_CARLO)
 (measure/exact_reference.py), or Monte Carlo throughout."""
 
 
+#: A pixel's traced and untraced estimates differ when the spread of their difference is
+#: above this share of the pixel's value (below it, float rounding of the two sums).
+TRACED_SHARE = 1e-5
+
+
 @dataclass
 class ReferenceRun:
     """The converged (or budget-limited) reference.
@@ -269,15 +274,25 @@ def control_variate(
     mask : (h, w) bool
         ``mask``, as judged.
     noise : float
-        Median over ``mask`` of the estimate's luminance standard error over its luminance
-        (channel errors added: an upper bound, as the reference's).
+        Median of the estimate's luminance standard error over its luminance (channel errors
+        added: an upper bound, as the reference's) over the pixels of ``mask`` where the
+        traced and untraced estimates differ (where something is traced); 0 where none do.
     """
     exact, covered = control[0], control[1][..., None]
-    estimate, error = reference.paired().controlled(exact)
+    paired = reference.paired()
+    estimate, error = paired.controlled(exact)
     hdr = np.where(covered, estimate, session.read_hdr()).astype(np.float32)
-    luminance = hdr[mask] @ LUMINANCE
-    spread = np.where(covered, error, np.inf)[mask] @ LUMINANCE
+    # the noise where sampling is left: the pixels whose traced and untraced estimates differ
+    # by more than float rounding (elsewhere the estimate is the exact value, and a median
+    # over them would hide the rest)
+    spread_y = np.nan_to_num(paired.difference_error, posinf=np.inf) @ LUMINANCE
+    traced = mask & (spread_y > TRACED_SHARE * np.abs(hdr @ LUMINANCE))
+    judged = traced if traced.any() else mask
+    luminance = hdr[judged] @ LUMINANCE
+    spread = np.where(covered, error, np.inf)[judged] @ LUMINANCE
     lit = luminance > 0
+    if not traced.any():
+        return hdr, mask, 0.0
     noise = float(np.median(spread[lit] / luminance[lit])) if lit.any() else float("inf")
     return hdr, mask, noise
 
