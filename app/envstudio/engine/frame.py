@@ -158,21 +158,8 @@ class FrameRenderer:
         reflectors are dropped); ``compare`` box-filters a supersampled method over it.
         Uses the HDR target of ``size`` (its content is replaced).
         """
-        self._ensure_target(size)
-        self._fbo.use()
-        self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        view, projection = camera.view_matrix(), camera.projection_matrix(size[0] / size[1])
         program = self.programs.get("frame/coverage.glsl")
-        set_uniform(program, "u_view", view)
-        set_uniform(program, "u_projection", projection)
-        self.ctx.enable(moderngl.DEPTH_TEST)
-        self.ctx.disable(moderngl.BLEND | moderngl.CULL_FACE)
-        for value, nodes in ((0.0, scene.local_objects()), (1.0, scene.reflectors())):
-            set_uniform(program, "u_value", value)
-            for gpu_node in nodes:
-                set_uniform(program, "u_model", gpu_node.model)
-                set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+        self._draw_reflectors_over_locals(program, scene, camera, size)
         return self.read_hdr()[..., 0] > 0.5
 
     def reflector_surface(
@@ -190,27 +177,34 @@ class FrameRenderer:
 
         Uses the HDR target of ``size`` (its content is replaced).
         """
-        view, projection = camera.view_matrix(), camera.projection_matrix(size[0] / size[1])
         program = self.programs.get("frame/surface.glsl")
-        set_uniform(program, "u_view", view)
-        set_uniform(program, "u_projection", projection)
         set_uniform(program, "u_camera_position", camera.position.astype(np.float32))
         frames = []
         for output in (0, 1):
-            self._ensure_target(size)
-            self._fbo.use()
-            self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-            self.ctx.enable(moderngl.DEPTH_TEST)
-            self.ctx.disable(moderngl.BLEND | moderngl.CULL_FACE)
             set_uniform(program, "u_output", output)
-            for value, nodes in ((0.0, scene.local_objects()), (1.0, scene.reflectors())):
-                set_uniform(program, "u_value", value)
-                for gpu_node in nodes:
-                    set_uniform(program, "u_model", gpu_node.model)
-                    set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                    gpu_node.mesh.render(program)
+            self._draw_reflectors_over_locals(program, scene, camera, size)
             frames.append(self.read_hdr())
         return frames[0], frames[1]
+
+    def _draw_reflectors_over_locals(
+        self, program: moderngl.Program, scene: GpuScene, camera: OrbitCamera, size
+    ) -> None:
+        """Clear the HDR target of ``size`` and draw the local objects (``u_value`` 0: they
+        hide what they cover) and then the reflectors (``u_value`` 1) with ``program``."""
+        self._ensure_target(size)
+        self._fbo.use()
+        self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        view, projection = camera.view_matrix(), camera.projection_matrix(size[0] / size[1])
+        set_uniform(program, "u_view", view)
+        set_uniform(program, "u_projection", projection)
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self.ctx.disable(moderngl.BLEND | moderngl.CULL_FACE)
+        for value, nodes in ((0.0, scene.local_objects()), (1.0, scene.reflectors())):
+            set_uniform(program, "u_value", value)
+            for gpu_node in nodes:
+                set_uniform(program, "u_model", gpu_node.model)
+                set_uniform(program, "u_normal_matrix", gpu_node.normal)
+                gpu_node.mesh.render(program)
 
     def _draw_background(self, scene: GpuScene, view, projection) -> None:
         program = self.programs.get("frame/background.glsl")
