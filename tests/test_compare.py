@@ -14,7 +14,7 @@ from envstudio.core.metrics import compare_images, psnr, relative_error, ssim
 from envstudio.core.parameters import Parameter
 from envstudio.engine.method import Method
 from envstudio.engine.session import RenderSession
-from envstudio.io.images import read_image, write_image
+from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.compare import footprint_filter, plan_parameters
 from envstudio.measure.stopping import (
@@ -28,6 +28,7 @@ from envstudio.measure.stopping import (
 from envstudio.methods.hwconv import method as hwconv_method
 from envstudio.methods.hwconv.accuracy import MODES, run_accuracy
 from envstudio.methods.reference.method import ReferenceMethod
+from scene_files import ball_scene
 
 # the Monte Carlo reference: these tests are about its accumulation, stopping and cache (the
 # exact one of the untraced model: tests/test_exact_reference.py)
@@ -41,15 +42,7 @@ def small_scene(tmp_path):
     d = texel_directions(32)
     sky = np.stack([0.4 + 0.3 * d[..., 1], 0.5 + 0.2 * d[..., 0], 0.8 - 0.3 * d[..., 2]], -1)
     sky += 3.0 * np.exp(-8.0 * np.sum((d - [0.3, 0.5, 0.8]) ** 2, -1))[..., None]
-    write_image(tmp_path / "sky.exr", np.maximum(sky, 0.0))
-    scene = tmp_path / "ball.toml"
-    scene.write_text(
-        'name = "ball"\n[environment]\nfile = "sky.exr"\n'
-        "[camera]\nazimuth = 20.0\nelevation = 10.0\ndistance = 3.0\nfov = 45.0\n"
-        '[[object]]\nname = "ball"\nprimitive = "sphere"\nsize = 2.0\nrole = "reflector"\n'
-        "[object.material]\nkd = 0.3\nfresnel = 0.5\nphong_exponent = 20.0\n"
-    )
-    return scene
+    return ball_scene(tmp_path, np.maximum(sky, 0.0))
 
 
 def compare(scene, out, *extra):

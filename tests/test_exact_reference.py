@@ -15,7 +15,7 @@ import pytest
 from envstudio.cli import main
 from envstudio.core.latlong import texel_directions, texel_solid_angles
 from envstudio.engine.session import RenderSession
-from envstudio.io.images import read_image, write_image
+from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.exact_reference import eq8_radiance, exact_frame
 from envstudio.measure.ground_truth import PairedEstimates
@@ -23,6 +23,7 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene.primitives import torus_knot
+from scene_files import ball_scene
 
 FRESNEL = np.array([0.9, 0.5, 0.2])
 KD = np.array([0.2, 0.4, 0.6])
@@ -99,15 +100,7 @@ def test_a_sample_facing_away_reflects_nothing():
 @pytest.fixture
 def ball(tmp_path):
     """A glossy sphere under the spot sky (as test_compare's small scene)."""
-    write_image(tmp_path / "sky.exr", spot_map(32))
-    scene = tmp_path / "ball.toml"
-    scene.write_text(
-        'name = "ball"\n[environment]\nfile = "sky.exr"\n'
-        "[camera]\nazimuth = 20.0\nelevation = 10.0\ndistance = 3.0\nfov = 45.0\n"
-        '[[object]]\nname = "ball"\nprimitive = "sphere"\nsize = 2.0\nrole = "reflector"\n'
-        "[object.material]\nkd = 0.3\nfresnel = 0.5\nphong_exponent = 20.0\n"
-    )
-    return scene
+    return ball_scene(tmp_path, spot_map(32))
 
 
 def test_the_frame_is_the_numpy_sum_box_filtered_over_each_pixel_s_covered_samples(ball):
