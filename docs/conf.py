@@ -57,7 +57,7 @@ sphinx_gallery_conf = {
     "examples_dirs": [str(ROOT / "examples" / "gallery")],
     "gallery_dirs": ["gallery"],
     "filename_pattern": r"\.py$",
-    "image_scrapers": ("envstudio_docs.scraper",),
+    "image_scrapers": ("envstudio_docs.scraper", "matplotlib"),
     "reset_modules": ("envstudio_docs.reset_shown",),
     "capture_repr": ("_repr_html_",),
     "download_all_examples": False,

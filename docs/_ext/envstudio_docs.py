@@ -6,6 +6,9 @@ checkout, the gallery's image scraper and the EGL check.
   its paper, summary, reflectance model, a parameter table, and its paragraph of
   ``docs/methods.md``.
 - ``{envstudio-methods}``: the table of every registered method, linked to its page.
+- ``{envstudio-scene-schema}``: the scene TOML schema, one table per TOML table, walked
+  from the msgspec structs of ``envstudio.io.scene_file`` (:class:`SceneSpec` down): each
+  key, the type it is checked against and its default.
 - ``{checkout}`text <path>```: a link to a file of the checkout outside the site
   (``studies/``, ``examples/``), relative to the built page; a missing file is a warning.
 - :func:`scraper`: sphinx-gallery's custom image scraper, saving every image that
@@ -22,6 +25,7 @@ import io
 import os
 import re
 import sys
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -291,9 +295,97 @@ class MethodsDirective(_MarkdownDirective):
         return self.parse(lines)
 
 
+# ---------------------------------------------------------------- the scene file schema
+
+
+def _struct_of(tp):
+    """The msgspec struct a field's type declares (plain, optional or a list of them)."""
+    import msgspec
+
+    from envstudio.io import scene_file
+
+    tp = scene_file._plain(tp)
+    if typing.get_origin(tp) is list:
+        tp = scene_file._plain(typing.get_args(tp)[0])
+    return tp if isinstance(tp, type) and issubclass(tp, msgspec.Struct) else None
+
+
+def _toml_default(field) -> str:
+    """A struct field's default as TOML would spell it ("required" where it has none)."""
+    import msgspec
+
+    if field.default is not msgspec.NODEFAULT:
+        value = field.default
+    elif field.default_factory is not msgspec.NODEFAULT:
+        return "(the table's defaults)"
+    else:
+        return "**required**"
+    if value is None:
+        return "(none)"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, str):
+        return f'`"{value}"`'
+    if isinstance(value, (tuple, list)):
+        return "`[" + ", ".join(f"{v:g}" for v in value) + "]`"
+    return f"`{value:g}`" if isinstance(value, float) else f"`{value}`"
+
+
+def _toml_type(tp) -> str:
+    """What a key's value must be, in words, as the scene loader's messages say it."""
+    from envstudio.io import scene_file
+
+    args = typing.get_args(tp)
+    optional = type(None) in args and len(args) == 2
+    words = scene_file._describe(tp, "a value")
+    return _cell(words + (" (optional)" if optional else ""))
+
+
+def scene_schema(spec=None, table: str = "", array: bool = False) -> list[tuple[str, str, list]]:
+    """``(header, docstring, rows)`` per TOML table below ``spec`` (default ``SceneSpec``),
+    each row ``(key, type, default)``; sub-tables follow their parent."""
+    import msgspec
+
+    from envstudio.io import scene_file
+
+    spec = spec or scene_file.SceneSpec
+    header = f"[[{table}]]" if array else f"[{table}]" if table else "top level"
+    rows, below = [], []
+    for field in msgspec.structs.fields(spec):
+        struct = _struct_of(field.type)
+        path = f"{table}.{field.name}" if table else field.name
+        if struct is not None:
+            listed = typing.get_origin(scene_file._plain(field.type)) is list
+            name = f"[[{path}]]" if listed else f"[{path}]"
+            rows.append((field.name, f"table `{name}`", _toml_default(field)))
+            below += scene_schema(struct, path, listed)
+        else:
+            rows.append((field.name, _toml_type(field.type), _toml_default(field)))
+    doc = " ".join((spec.__doc__ or "").strip().split("\n\n")[0].split())
+    doc = re.sub(r"^``\[[^`]*\]``: ", "", doc)  # the header, shown above it already
+    doc = doc[:1].upper() + doc[1:]
+    return [(header, doc, rows), *below]
+
+
+class SceneSchemaDirective(_MarkdownDirective):
+    """``{envstudio-scene-schema}``: the scene TOML schema from the msgspec structs."""
+
+    def run(self):
+        lines = []
+        for header, doc, rows in scene_schema():
+            lines += [f"### `{header}`" if header != "top level" else "### Top level", ""]
+            if doc:
+                lines += [doc, ""]
+            lines += ["| key | type | default |", "| --- | --- | --- |"]
+            lines += [f"| `{key}` | {kind} | {default} |" for key, kind, default in rows]
+            lines.append("")
+        return self.parse(lines)
+
+
 def setup(app):
     app.add_role("checkout", checkout_role)
     app.add_directive("envstudio-method", MethodDirective)
     app.add_directive("envstudio-methods", MethodsDirective)
+    app.add_directive("envstudio-scene-schema", SceneSchemaDirective)
     app.connect("source-read", rewrite_outside_links)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
