@@ -157,24 +157,79 @@ def error_curve(
         that refuses its values at some N (hwconv's ``border`` at a small N) gets NaN
         there and a note instead.
     """
-    kept, notes = curve_methods(names)
-    if not kept:
-        raise ParameterError(
-            f"methods {list(names)!r}: none has an exact reference ({'; '.join(notes)})"
-        )
-    _check_view(session, size, ssaa)
-    curve = ErrorCurve(list(exponents), {n: [] for n in kept}, {n: [] for n in kept}, notes)
-    for done, exponent in enumerate(exponents, 1):
-        assignments = [*parameters, "trace=false", f"phong_exponent={exponent!r}"]
-        for name, measured in _measured(session, kept, size, ssaa, assignments).items():
-            if isinstance(measured, str):
-                curve.notes.append(f"{name} at N = {exponent:g}: {measured}")
-                measured = (math.nan, math.nan)
-            curve.errors[name].append(measured[0])
-            curve.psnr_db[name].append(measured[1])
+    steps = CurveSteps(session, names, exponents, size, ssaa, parameters)
+    while not steps.finished:
+        steps.step()
         if progress is not None:
-            progress(done, len(exponents))
-    return curve
+            progress(steps.done, steps.total)
+    return steps.curve
+
+
+class CurveSteps:
+    """:func:`error_curve` one exponent at a time (the viewer's glossiness plot takes a step
+    a frame): after :attr:`total` calls of :meth:`step`, :attr:`curve` holds what
+    :func:`error_curve` returns for the same arguments.
+
+    Parameters
+    ----------
+    session, names, exponents, size, ssaa, parameters
+        As :func:`error_curve`'s; the camera is read at each step.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`error_curve`: no method with an exact reference, or a camera that sees no
+        reflector.
+    """
+
+    def __init__(
+        self,
+        session: RenderSession,
+        names: Sequence[str],
+        exponents: Sequence[float],
+        size: tuple[int, int],
+        ssaa: int,
+        parameters: Sequence[str] = (),
+    ):
+        kept, notes = curve_methods(names)
+        if not kept:
+            raise ParameterError(
+                f"methods {list(names)!r}: none has an exact reference ({'; '.join(notes)})"
+            )
+        _check_view(session, size, ssaa)
+        self.session = session
+        self.names = kept
+        self.size, self.ssaa, self.parameters = size, ssaa, list(parameters)
+        self.curve = ErrorCurve(
+            list(exponents), {n: [] for n in kept}, {n: [] for n in kept}, notes
+        )
+        self.done = 0
+        """Exponents measured so far."""
+
+    @property
+    def total(self) -> int:
+        """Exponents in all."""
+        return len(self.curve.exponents)
+
+    @property
+    def finished(self) -> bool:
+        """Whether every exponent is measured."""
+        return self.done >= self.total
+
+    def step(self) -> None:
+        """Measure the next exponent (nothing once finished)."""
+        if self.finished:
+            return
+        exponent = self.curve.exponents[self.done]
+        assignments = [*self.parameters, "trace=false", f"phong_exponent={exponent!r}"]
+        measured = _measured(self.session, self.names, self.size, self.ssaa, assignments)
+        for name, found in measured.items():
+            if isinstance(found, str):
+                self.curve.notes.append(f"{name} at N = {exponent:g}: {found}")
+                found = (math.nan, math.nan)
+            self.curve.errors[name].append(found[0])
+            self.curve.psnr_db[name].append(found[1])
+        self.done += 1
 
 
 def _measured(

@@ -4,7 +4,8 @@ around it.
 Each frame::
 
     run the jobs announced last frame (file loads)       DeferredWork.run_due
-    poll "Open..." dialogs; cycle methods; turntable
+    poll "Open..." dialogs; the glossiness plot's step    ViewerPanels.step
+    cycle methods; turntable
     imgui.new_frame → menu bar, dock space → the view's rectangle (ui/docking.py)
     panels, status line                                  ui/viewer_panels.py
     the view → the view's rectangle                      ui/view_renderer.py
@@ -312,6 +313,7 @@ class Viewer(WindowConfig):
         """Draw one frame: scene, panels, captures; stop after ``--frames``."""
         self.jobs.run_due()
         self.panels.poll_dialogs()
+        self.panels.step()
         if self.options.cycle_methods and self.frames_drawn % CYCLE_FRAMES == 0:
             self.choice.cycle(first=self.frames_drawn == 0)
         self.control.advance(frametime)

@@ -15,6 +15,7 @@ from envstudio.core.colormap import magma
 from envstudio.engine.method import Method
 from envstudio.engine.split_view import SplitSettings
 from envstudio.ui.docking import PANEL_FLAGS
+from envstudio.ui.error_plot import GlossinessCurve, glossiness_section
 from envstudio.ui.grid import GridState, grid_section
 
 OFF = "off"
@@ -86,9 +87,14 @@ def compare_panel(
     current: str,
     state: CompareState,
     grid: GridState | None = None,
-) -> None:
+    curve: GlossinessCurve | None = None,
+    exponent: float | None = None,
+) -> str | None:
     """Edit ``state``: the method compared against, split, divider, heat map and its scale;
-    with ``grid``, the grid view and the methods it tiles (the grid wins over the split)."""
+    with ``grid``, the grid view and the methods it tiles (the grid wins over the split);
+    with ``curve``, the error-against-glossiness plot, ``exponent`` (the current N) marked.
+    Returns the method whose curve was clicked, or None."""
+    picked = None
     if imgui.begin("Compare", None, PANEL_FLAGS)[0]:
         names = [OFF, *(n for n in methods if n != current)]
         chosen = state.other if state.other in names else OFF
@@ -122,7 +128,10 @@ def compare_panel(
                 _colour_bar(settings.heat_scale)
         if grid is not None:
             grid_section(list(methods), grid)
+        if curve is not None:
+            picked = glossiness_section(curve, list(methods), exponent)
     imgui.end()
+    return picked
 
 
 def _colour_bar(scale: float, steps: int = 32) -> None:

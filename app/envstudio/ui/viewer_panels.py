@@ -7,6 +7,7 @@ from envstudio.io.images import HDR_SUFFIXES
 from envstudio.io.meshes import MESH_SUFFIXES
 from envstudio.ui.capture_control import CaptureControl
 from envstudio.ui.compare_panel import CompareState, compare_panel
+from envstudio.ui.error_plot import GlossinessCurve, current_exponent
 from envstudio.ui.file_dialogs import OpenFileDialog
 from envstudio.ui.grid import GridState
 from envstudio.ui.imgui_renderer import ImGuiRenderer
@@ -68,6 +69,8 @@ class ViewerPanels:
         self.captures = captures
         self.jobs = jobs
         self.status = status
+        self.curve = GlossinessCurve()
+        """The Compare panel's error-against-glossiness plot (measured by :meth:`step`)."""
         self.dialogs = SceneDialogs(
             OpenFileDialog("Open environment", "HDR environments", HDR_SUFFIXES),
             OpenFileDialog("Open mesh", "Meshes", MESH_SUFFIXES),
@@ -88,9 +91,19 @@ class ViewerPanels:
             choice.select(picked)
         scene_panel(self.control, display, self.dialogs, self.jobs, self.status)
         stats_panel(self.history, render_size)
-        compare_panel(choice.available, choice.name, self.compare, self.grid)
+        exponent = current_exponent(choice.method(choice.name), choice.hub())
+        clicked = compare_panel(
+            choice.available, choice.name, self.compare, self.grid, self.curve, exponent
+        )
+        if clicked and clicked != choice.name:
+            choice.select(clicked)
         if capture_panel(self.captures.options):
             self.captures.request(self.captures.options.fmt)
+
+    def step(self) -> None:
+        """Take the glossiness plot's next measurement when one is due (call at frame start:
+        it renders offscreen in a session of its own)."""
+        self.curve.update(self.session)
 
     def poll_dialogs(self) -> None:
         """Load the file an "Open..." dialog returned, as a job."""
@@ -104,6 +117,7 @@ class ViewerPanels:
             self.jobs.submit(f"loading {mesh.name}", lambda: self.control.load_mesh(mesh))
 
     def close(self) -> None:
-        """Close any dialog still open."""
+        """Close any dialog still open; free the plot's session."""
         self.dialogs.environment.close()
         self.dialogs.mesh.close()
+        self.curve.release()
