@@ -37,6 +37,8 @@ from envstudio.measure.error_curve import CurveSteps, ErrorCurve
 EXPONENTS = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0)
 """The Phong exponents N measured, as es.error_curve's default."""
 SIZE = (64, 64)
+#: Both axes reach this factor past the first and last values (their markers whole).
+MARGIN = 1.3
 SSAA = 2
 STILL_S = 0.3
 """Seconds the view must stay unchanged before a step is taken."""
@@ -242,10 +244,14 @@ def glossiness_section(
         implot.setup_axes("Phong exponent N", "median relative error")
         implot.setup_axis_scale(implot.ImAxis_.x1, implot.Scale_.log10)
         implot.setup_axis_scale(implot.ImAxis_.y1, implot.Scale_.log10)
-        implot.setup_axis_limits(
-            implot.ImAxis_.x1, min(plot.exponents), max(plot.exponents), implot.Cond_.always
-        )
-        implot.setup_legend(implot.Location_.north_east, implot.LegendFlags_.no_buttons)
+        low, high = min(plot.exponents) / MARGIN, max(plot.exponents) * MARGIN
+        implot.setup_axis_limits(implot.ImAxis_.x1, low, high, implot.Cond_.always)
+        # the error axis follows the points as they come, none cut at an edge
+        ys = np.concatenate([measured_points(curve, name)[1] for name in curve.errors])
+        if len(ys):
+            low, high = ys.min() / MARGIN, ys.max() * MARGIN
+            implot.setup_axis_limits(implot.ImAxis_.y1, low, high, implot.Cond_.always)
+        implot.setup_legend(implot.Location_.south_west, implot.LegendFlags_.no_buttons)
         for name in curve.errors:
             xs, ys = measured_points(curve, name)
             implot.plot_line(name, xs, ys, implot.Spec(marker=implot.Marker_.circle))
