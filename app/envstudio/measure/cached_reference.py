@@ -60,6 +60,19 @@ MAX_FRAMES = 64
 """Frames a progressive method is given to finish at the reference's size."""
 
 
+def render_finished(
+    renderer: FrameRenderer, session: Session, method: Method, size: tuple[int, int]
+) -> npt.NDArray[np.float32]:
+    """``method``'s frame at ``size`` as it renders in ``session`` (camera, scene), given up to
+    :data:`MAX_FRAMES` frames to finish (a progressive method); (h, w, 3) float32 HDR."""
+    renderer.render_hdr(session.gpu_scene, method, session.camera, size)
+    for _ in range(MAX_FRAMES - 1):
+        if method.finished():
+            break
+        renderer.render_hdr(session.gpu_scene, method, session.camera, size)
+    return renderer.read_hdr()
+
+
 @dataclass(frozen=True)
 class CachedReference:
     """A saved reference accumulation that matches a tile.
@@ -232,13 +245,8 @@ class CachedReferences:
         if resolved is None:
             return None
         truth, mask, status = resolved
-        renderer = self._frame_renderer()
-        renderer.render_hdr(session.gpu_scene, method, session.camera, found.size)
-        for _ in range(MAX_FRAMES - 1):
-            if method.finished():
-                break
-            renderer.render_hdr(session.gpu_scene, method, session.camera, found.size)
-        shown = _display(renderer.read_hdr(), display)
+        hdr = render_finished(self._frame_renderer(), session, method, found.size)
+        shown = _display(hdr, display)
         return CachedNumbers(psnr(shown, truth, mask), flip(shown, truth, mask), status)
 
     def _resolve(self, session, found, display):

@@ -35,6 +35,7 @@ from envstudio.core.metrics import psnr
 from envstudio.engine.frame import FrameRenderer
 from envstudio.engine.method import Method, Session
 from envstudio.gpu.programs import ProgramLibrary
+from envstudio.measure.cached_reference import render_finished
 from envstudio.measure.compare import footprint_filter
 from envstudio.measure.exact_reference import eq8_radiance
 from envstudio.measure.stopping import median_error
@@ -43,8 +44,6 @@ SSAA = 2
 """Footprint samples per pixel per axis of the tiles' reference and their methods."""
 CHUNK = 1 << 16
 """Samples shaded per step."""
-MAX_FRAMES = 64
-"""Frames a progressive method is given to finish."""
 
 
 @dataclass(frozen=True)
@@ -193,12 +192,7 @@ class ExactTiles:
         """``method``'s frame at ``size`` × ssaa, until it is finished, box-filtered."""
         fine = (size[0] * self.ssaa, size[1] * self.ssaa)
         renderer = self._frame_renderer()
-        renderer.render_hdr(session.gpu_scene, method, session.camera, fine)
-        for _ in range(MAX_FRAMES - 1):
-            if method.finished():
-                break
-            renderer.render_hdr(session.gpu_scene, method, session.camera, fine)
-        hdr = renderer.read_hdr()
+        hdr = render_finished(renderer, session, method, fine)
         covered = renderer.reflector_coverage(session.gpu_scene, session.camera, fine)
         return footprint_filter(hdr, covered, self.ssaa)
 
