@@ -73,6 +73,7 @@ es.show(tile([maps[:6], maps[6:]]))
 # faded near its singularity (the reflection direction opposite its own view, on the rim), and
 # last the blend, the map the reflector is drawn with. Features of the maps (the softboxes)
 # move to the same place in all three warped maps: the mirror warp matches the Phong lobe.
+# The studio camera lies almost on the edge between views 5 and 10, so view 6 weighs 0.001.
 said = envstudio(
     "figure", "rsibr-warp", "--param", "phong_exponent=50", "--size", "128x128", "-o", "fig4.png"
 )
