@@ -56,7 +56,7 @@ def labelled(pixels, text):
 # %%
 # The bake: one map per icosahedron vertex v_j, each as a camera in direction v_j from the
 # object sees it (its frame T_j). The ``.rsibr`` file is a NumPy archive (the file formats
-# page lists its arrays). Outside each map's disc no direction is stored.
+# page lists its arrays). The corners outside each disc stand for no direction.
 studio = str(ASSETS / "hdr" / "studio.exr")
 envstudio("bake", "rsibr", "--env", studio, "--param", "phong_exponent=50", "-o", "studio.rsibr")
 bake = np.load(folder / "studio.rsibr")
@@ -64,7 +64,7 @@ header = json.loads(str(bake["header"]))
 print({k: header[k] for k in ("brdf", "parameters", "size", "views", "samples", "warp")})
 for j, v in enumerate(bake["views"]):
     print(f"view {j:2d}: v = ({v[0]:+.3f}, {v[1]:+.3f}, {v[2]:+.3f})")
-maps = [labelled(upright(es.display(m)), f"view {j}") for j, m in enumerate(bake["maps"])]
+maps = [labelled(upright(es.display(m), 2), f"view {j}") for j, m in enumerate(bake["maps"])]
 es.show(tile([maps[:6], maps[6:]]))
 
 # %%
