@@ -1,7 +1,8 @@
 """Sphinx configuration of the envmap-studio site (``./run.sh docs``).
 
 The gallery (``examples/gallery/*.py``) is executed at every build through the Python API on
-a headless EGL context; without one the build stops here with one line.
+a headless EGL context, and the viewer tour's screenshots are taken by the real window under
+Xvfb; without either the build stops here with one line.
 """
 
 import os
@@ -18,6 +19,7 @@ import envstudio_docs  # noqa: E402
 import envstudio  # noqa: E402
 
 envstudio_docs.check_context()
+envstudio_docs.check_display()
 
 project = "envmap-studio"
 author = "the envmap-studio authors"
