@@ -11,6 +11,8 @@ checkout, the gallery's image scraper and the EGL check.
   key, the type it is checked against and its default.
 - ``{checkout}`text <path>```: a link to a file of the checkout outside the site
   (``studies/``, ``examples/``), relative to the built page; a missing file is a warning.
+- ``{checkout-figure} PATH``: a picture of the checkout outside the site (a study's figure) as
+  a figure, copied into ``_generated/``; its content is the caption.
 - :func:`scraper`: sphinx-gallery's custom image scraper, saving every image that
   ``envstudio.show`` displayed while a block ran (enlarged by whole pixels to at least
   :data:`MIN_WIDTH`: the gallery renders at 64×64 to stay fast).
@@ -282,6 +284,32 @@ def rewrite_outside_links(app, docname, source) -> None:
     source[0] = outside_links(source[0])
 
 
+class CheckoutFigureDirective(SphinxDirective):
+    """``{checkout-figure} PATH``: the checkout's image PATH (relative to its root) as a figure,
+    copied into the sources' ``_generated/`` (the sources may be a copy of ``docs/`` elsewhere);
+    ``:alt:`` and ``:width:`` as the figure's; the content is the caption."""
+
+    required_arguments = 1
+    has_content = True
+    option_spec: typing.ClassVar[dict] = {"alt": str, "width": str}
+
+    def run(self):
+        path = self.arguments[0]
+        source = ROOT / path
+        if not source.is_file():
+            raise self.error(f"checkout-figure: no file {path} in the checkout")
+        target = Path(self.env.srcdir) / "_generated" / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, target)
+        self.env.note_dependency(str(source))
+        lines = [f"```{{figure}} /_generated/{path}"]
+        lines += [f":{name}: {value}" for name, value in self.options.items()]
+        lines += ["", *self.content, "```"]
+        container = nodes.container()
+        self.state.nested_parse(StringList(lines, source=self.env.docname), 0, container)
+        return container.children
+
+
 # ---------------------------------------------------------------- technique pages
 
 
@@ -541,6 +569,7 @@ def setup(app):
     app.add_directive("envstudio-methods", MethodsDirective)
     app.add_directive("envstudio-scene-schema", SceneSchemaDirective)
     app.add_directive("envstudio-viewer-shot", ViewerShotDirective)
+    app.add_directive("checkout-figure", CheckoutFigureDirective)
     app.connect("builder-inited", TOUR.start, priority=100)  # before the gallery runs
     app.connect("env-before-read-docs", TOUR.wait)
     app.connect("build-finished", TOUR.stop)
