@@ -1,7 +1,8 @@
 """Sphinx configuration of the envmap-studio site (``./run.sh docs``).
 
 The gallery (``examples/gallery/*.py``) is executed at every build through the Python API on
-a headless EGL context; without one the build stops here with one line.
+a headless EGL context, and the viewer tour's screenshots are taken by the real window under
+Xvfb; without either the build stops here with one line.
 """
 
 import os
@@ -18,6 +19,7 @@ import envstudio_docs  # noqa: E402
 import envstudio  # noqa: E402
 
 envstudio_docs.check_context()
+envstudio_docs.check_display()
 
 project = "envmap-studio"
 author = "the envmap-studio authors"
@@ -26,7 +28,7 @@ release = envstudio.__version__
 version = release
 
 extensions = [
-    "myst_parser",
+    "myst_nb",  # MyST Markdown pages (it sets up myst_parser) and docs/notebook.ipynb
     "sphinx.ext.autodoc",
     "numpydoc",
     "sphinxarg.ext",
@@ -34,13 +36,16 @@ extensions = [
     "envstudio_docs",
 ]
 
-source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb", ".rst": "restructuredtext"}
 root_doc = "index"
 exclude_patterns = ["_build", "methods.md", "gallery/*.ipynb", "gallery/*.py", "**.zip"]
 templates_path = []
 
 myst_enable_extensions = ["colon_fence", "deflist"]
 myst_heading_anchors = 3
+# docs/notebook.ipynb is kept without outputs and shown as it is: tests/test_notebook.py runs it
+# in a real kernel; running it here again would add about 20 s to every build
+nb_execution_mode = "off"
 
 html_theme = "furo"
 html_title = f"envmap-studio {release}"

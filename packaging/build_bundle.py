@@ -75,6 +75,9 @@ EXCLUDES = (
     "babel",
     "numpydoc",
     "myst_parser",
+    "myst_nb",
+    "jupyter_cache",
+    "sqlalchemy",
     "pkg_resources",
 )
 # The machine's own: GL drivers (Mesa's libEGL and LLVM, a GPU's libGL) load into the process and

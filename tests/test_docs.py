@@ -15,13 +15,14 @@ import time
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from envstudio.engine.registry import available_methods
 
 ROOT = Path(__file__).resolve().parents[1]
 SPHINX = [sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-q"]
-PAGES = ("index.html", "getting-started.html", "techniques/kautz.html")
+PAGES = ("index.html", "getting-started.html", "viewer.html", "techniques/kautz.html")
 
 
 def _copy_sources(target: Path) -> Path:
@@ -97,6 +98,24 @@ def test_the_gallery_ran_every_example_and_shows_its_picture(site):
         assert any(f"sphx_glr_{name}_001.png" in s for s in sources), (name, sources)
 
 
+def test_the_viewer_tour_shows_the_window_at_every_step(site):
+    """docs/viewer.md's pictures are the window's screenshots of this build: none blank (dark
+    and light pixels both), the whole-window ones all of one size."""
+    from PIL import Image
+
+    sources = [s for s in _images(site / "viewer.html") if "_images/" in s]
+    shots = {Path(s).stem.rstrip("0123456789"): s for s in sources}  # Sphinx numbers namesakes
+    assert sorted(shots) == ["capture", "capture-file", "grid", "panels", "reference", "split"]
+    windows = set()
+    for name, source in shots.items():
+        picture = np.asarray(Image.open(site / source).convert("RGB"), dtype=np.float64)
+        assert picture.std() > 10.0, f"{source}: blank"
+        assert picture.mean(axis=2).min() < 40 < picture.mean(axis=2).max(), source
+        if name in {"panels", "split", "grid", "capture"}:
+            windows.add(picture.shape[:2])
+    assert len(windows) == 1, windows
+
+
 def test_the_cli_reference_is_the_real_parser(site):
     text = (site / "reference" / "cli.html").read_text(encoding="utf-8")
     from envstudio.cli import build_parser
@@ -147,6 +166,22 @@ def test_the_pages_load_in_chromium_with_every_image(site, page):
     assert match, dom[-2000:]
     report = json.loads(match.group(1).replace("&quot;", '"').replace("&amp;", "&"))
     assert report["images"] >= 1 and report["broken"] == [] and report["errors"] == [], report
+
+
+def test_without_xvfb_the_build_stops_in_one_line(tmp_path):
+    """No Xvfb on the PATH: one line naming it, before the gallery runs."""
+    source = _copy_sources(tmp_path / "src")
+    result = subprocess.run(
+        [*SPHINX, str(source), str(tmp_path / "html")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=_environment(tmp_path, PATH=str(Path(sys.executable).parent)),
+        check=False,
+    )
+    assert result.returncode == 2, result.stdout + result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Xvfb" in lines[0] and "Traceback" not in result.stderr, lines
 
 
 def test_without_egl_the_build_stops_in_one_line(tmp_path):

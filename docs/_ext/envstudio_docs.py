@@ -11,26 +11,38 @@ checkout, the gallery's image scraper and the EGL check.
   key, the type it is checked against and its default.
 - ``{checkout}`text <path>```: a link to a file of the checkout outside the site
   (``studies/``, ``examples/``), relative to the built page; a missing file is a warning.
+- ``{checkout-figure} PATH``: a picture of the checkout outside the site (a study's figure) as
+  a figure, copied into ``_generated/``; its content is the caption.
 - :func:`scraper`: sphinx-gallery's custom image scraper, saving every image that
   ``envstudio.show`` displayed while a block ran (enlarged by whole pixels to at least
   :data:`MIN_WIDTH`: the gallery renders at 64×64 to stay fast).
 - :func:`check_context`: one line and exit status 2 when no OpenGL context can be made,
-  before the gallery runs.
+  before the gallery runs; :func:`check_display`: the same when Xvfb is missing.
+- The viewer tour (``docs/viewer.md``): :class:`ViewerTour` runs the real viewer once under
+  a private Xvfb server (``_ext/viewer_tour.py``) while the gallery runs, and its
+  screenshots land in ``_generated/viewer/``; ``{envstudio-viewer-shot} NAME`` shows one
+  as a figure, its caption the directive's text and what the tour recorded (frame, time,
+  the reference's status line).
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import re
+import shutil
+import subprocess
 import sys
+import tempfile
 import typing
 from pathlib import Path
 
 import numpy as np
 from docutils import nodes
 from docutils.statemachine import StringList
+from sphinx.errors import ExtensionError
 from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
 
@@ -53,6 +65,132 @@ def check_context() -> None:
         sys.stderr.flush()
         os._exit(2)  # Sphinx would wrap a SystemExit from conf.py in a configuration error
     ctx.release()
+
+
+def check_display() -> None:
+    """Exit with one line (status 2) when the viewer tour cannot run: no Xvfb to run the
+    viewer's window in."""
+    if shutil.which("Xvfb") is None:
+        sys.stderr.write("docs: the viewer tour needs Xvfb (Debian: apt install xvfb xauth)\n")
+        sys.stderr.flush()
+        os._exit(2)
+
+
+# ---------------------------------------------------------------- the viewer tour
+
+TOUR_SCRIPT = Path(__file__).with_name("viewer_tour.py")
+TOUR_SETTINGS = {"window_size": [800, 500], "method_values": {"reference": {"trace": False}}}
+"""The tour's settings file: a small window; the reference without tracing (the
+environment-map model, as the grid's exact reference; a batch costs a third)."""
+TOUR_TIMEOUT_S = 300
+
+
+class ViewerTour:
+    """The tour's run: a private Xvfb server and the viewer driven by ``viewer_tour.py``,
+    started at ``builder-inited`` (before the gallery runs) and awaited before the pages
+    are read."""
+
+    def __init__(self):
+        self.folder: tempfile.TemporaryDirectory | None = None
+        self.server: subprocess.Popen | None = None
+        self.viewer: subprocess.Popen | None = None
+        self.out: Path | None = None
+
+    def start(self, app) -> None:
+        """Start Xvfb and the viewer; the screenshots go to ``_generated/viewer/``."""
+        self.out = Path(app.srcdir) / "_generated" / "viewer"
+        shutil.rmtree(self.out, ignore_errors=True)
+        self.folder = tempfile.TemporaryDirectory(prefix="envstudio-tour-")
+        home = Path(self.folder.name)
+        (home / "config").mkdir()
+        (home / "config" / "settings.json").write_text(json.dumps(TOUR_SETTINGS))
+        read_fd, write_fd = os.pipe()
+        self.server = subprocess.Popen(
+            [
+                *("Xvfb", "-displayfd", str(write_fd)),
+                *("-screen", "0", "1280x800x24", "-nolisten", "tcp"),
+            ],
+            pass_fds=(write_fd,),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        os.close(write_fd)
+        with os.fdopen(read_fd) as pipe:
+            number = pipe.readline().strip()
+        if not number:
+            self.stop()
+            raise ExtensionError("viewer tour: Xvfb exited before reporting its display")
+        env = dict(os.environ, DISPLAY=f":{number}", ENVSTUDIO_CONFIG_DIR=str(home / "config"))
+        env["XDG_PICTURES_DIR"] = str(home / "Pictures")
+        env.pop("WAYLAND_DISPLAY", None)
+        self.viewer = subprocess.Popen(
+            [sys.executable, str(TOUR_SCRIPT), str(self.out)],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+
+    def wait(self, app=None, env=None, docnames=None) -> None:
+        """Wait for the viewer (once); a failure stops the build with its last line."""
+        if self.viewer is None:
+            return
+        try:
+            output, _ = self.viewer.communicate(timeout=TOUR_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            self.viewer.kill()
+            output, _ = self.viewer.communicate()
+        status, self.viewer = self.viewer.returncode, None
+        self.stop()
+        if status != 0:
+            lines = [line for line in output.splitlines() if line.strip()] or ["no output"]
+            said = [line for line in lines if line.startswith("envstudio:")] or lines
+            raise ExtensionError(f"viewer tour: the viewer exited with {status}: {said[-1]}")
+        LOGGER.info("viewer tour: %s", ", ".join(sorted(p.name for p in self.out.glob("*.png"))))
+
+    def stop(self, *_args) -> None:
+        """End the viewer (if still running) and the server; remove the settings folder."""
+        if self.viewer is not None:
+            self.viewer.kill()
+            self.viewer.wait()
+            self.viewer = None
+        if self.server is not None:
+            self.server.terminate()
+            try:
+                self.server.wait(5)
+            except subprocess.TimeoutExpired:
+                self.server.kill()
+                self.server.wait()
+            self.server = None
+        if self.folder is not None:
+            self.folder.cleanup()
+            self.folder = None
+
+    def record(self) -> dict:
+        """What the tour wrote in ``tour.json``: per shot its frame, seconds, method, status."""
+        return json.loads((self.out / "tour.json").read_text(encoding="utf-8"))
+
+
+TOUR = ViewerTour()
+
+
+def _shot_facts(name: str, record: dict) -> str:
+    """The generated line of a shot's caption: when the tour took it (frame, seconds since the
+    first frame, the picture's size); for the reference's views, its status line then."""
+    if name == "reference":
+        views = [record[shot] for shot in sorted(record) if shot.startswith("reference-")]
+        said = "; ".join(
+            f"frame {facts['frame']}, {facts['seconds']:g} s: “{facts['status']}”"
+            for facts in views
+        )
+        return f"Left to right, with the Method panel's status line: {said}."
+    if name == "capture-file":
+        return f"The file F12 wrote, `{record['capture']['file']}`."
+    facts = record[name]
+    width, height = facts["size"]
+    return (
+        f"Frame {facts['frame']}, {facts['seconds']:g} s after the first; {width}×{height} pixels."
+    )
 
 
 # ---------------------------------------------------------------- the gallery scraper
@@ -144,6 +282,32 @@ def outside_links(markdown: str) -> str:
 def rewrite_outside_links(app, docname, source) -> None:
     """``source-read``: rewrite the links of the kept Markdown files (plugins.md)."""
     source[0] = outside_links(source[0])
+
+
+class CheckoutFigureDirective(SphinxDirective):
+    """``{checkout-figure} PATH``: the checkout's image PATH (relative to its root) as a figure,
+    copied into the sources' ``_generated/`` (the sources may be a copy of ``docs/`` elsewhere);
+    ``:alt:`` and ``:width:`` as the figure's; the content is the caption."""
+
+    required_arguments = 1
+    has_content = True
+    option_spec: typing.ClassVar[dict] = {"alt": str, "width": str}
+
+    def run(self):
+        path = self.arguments[0]
+        source = ROOT / path
+        if not source.is_file():
+            raise self.error(f"checkout-figure: no file {path} in the checkout")
+        target = Path(self.env.srcdir) / "_generated" / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, target)
+        self.env.note_dependency(str(source))
+        lines = [f"```{{figure}} /_generated/{path}"]
+        lines += [f":{name}: {value}" for name, value in self.options.items()]
+        lines += ["", *self.content, "```"]
+        container = nodes.container()
+        self.state.nested_parse(StringList(lines, source=self.env.docname), 0, container)
+        return container.children
 
 
 # ---------------------------------------------------------------- technique pages
@@ -295,6 +459,23 @@ class MethodsDirective(_MarkdownDirective):
         return self.parse(lines)
 
 
+class ViewerShotDirective(_MarkdownDirective):
+    """``{envstudio-viewer-shot} NAME``: the tour's screenshot NAME as a figure; its caption
+    the directive's content, then :func:`_shot_facts`."""
+
+    required_arguments = 1
+    has_content = True
+
+    def run(self):
+        name = self.arguments[0]
+        if not (TOUR.out / f"{name}.png").is_file():
+            raise self.error(f"envstudio-viewer-shot: the tour took no shot {name!r}")
+        self.env.note_dependency(str(TOUR.out / "tour.json"))
+        lines = [f"```{{figure}} /_generated/viewer/{name}.png", f":alt: {name}", ""]
+        lines += [*self.content, "", f"*{_shot_facts(name, TOUR.record())}*", "```"]
+        return self.parse(lines)
+
+
 # ---------------------------------------------------------------- the scene file schema
 
 
@@ -387,5 +568,10 @@ def setup(app):
     app.add_directive("envstudio-method", MethodDirective)
     app.add_directive("envstudio-methods", MethodsDirective)
     app.add_directive("envstudio-scene-schema", SceneSchemaDirective)
+    app.add_directive("envstudio-viewer-shot", ViewerShotDirective)
+    app.add_directive("checkout-figure", CheckoutFigureDirective)
+    app.connect("builder-inited", TOUR.start, priority=100)  # before the gallery runs
+    app.connect("env-before-read-docs", TOUR.wait)
+    app.connect("build-finished", TOUR.stop)
     app.connect("source-read", rewrite_outside_links)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
