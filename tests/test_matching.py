@@ -1,6 +1,11 @@
 """Matched parameters: b <-> N through the fitted mapping, material copied, mip methods at level."""
 
+import math
+from dataclasses import replace
+
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from envstudio.core.ggx import alpha_for_exponent, exponent_for_alpha
 from envstudio.core.parameters import Parameter
@@ -8,8 +13,15 @@ from envstudio.engine.method import Method
 from envstudio.engine.registry import available_methods, ground_truth_class
 from envstudio.engine.session import RenderSession
 from envstudio.io.scene_file import load_scene
+from envstudio.measure.cached_reference import CachedReferences
 from envstudio.measure.compare import plan_parameters, run_comparison
-from envstudio.measure.matching import GlossinessLink, glossiness, match_glossiness
+from envstudio.measure.matching import (
+    GLOSSINESS_NAMES,
+    GlossinessLink,
+    glossiness,
+    match_glossiness,
+    match_through,
+)
 from envstudio.methods.kautz.method import KautzMethod
 from envstudio.methods.reference.method import ReferenceMethod
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
@@ -123,9 +135,15 @@ CUBE = 64
 def _declared(cls: type[Method]) -> Method:
     """A method with ``cls``'s name and parameter declarations, made without GL (matching
     reads and sets only the values)."""
+    return _declared_class(cls)(None, None)
+
+
+def _declared_class(cls: type[Method], parameters: tuple | None = None) -> type[Method]:
+    """A GL-free class with ``cls``'s name, model(s) and ``parameters`` (its own)."""
     attrs = {"name": cls.name, "title": cls.title, "summary": cls.summary}
-    attrs |= {"parameters": cls.parameters, "render": lambda self, frame: None}
-    return type(f"Declared{cls.__name__}", (Method,), attrs)(None, None)
+    attrs |= {"reflectance": cls.reflectance, "models": getattr(cls, "models", ())}
+    attrs |= {"parameters": cls.parameters if parameters is None else parameters}
+    return type(f"Declared{cls.__name__}", (Method,), attrs | {"render": lambda s, f: None})
 
 
 def _tiles() -> dict[str, Method]:
@@ -195,3 +213,138 @@ def test_matching_switched_on_again_takes_the_main_methods_look():
     assert tiles["kautz"].values["lod_bias"] == pytest.approx(
         float(lod_bias_for_exponent(100.0, CUBE))  # hwconv's default N
     )
+
+
+FUZZ = settings(
+    max_examples=1000,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],  # the autouse ones
+)
+
+# every value a match sets stays inside the target's declared range, whatever the source's
+# slider says; the line says when it was clamped (kautz's b = 1.7 on a 256² cube is N ≈ 8651,
+# which rsibr, N in [1, 5000], once took unclamped: `view --method kautz --grid` exited)
+MATCHED = GLOSSINESS_NAMES
+"""What a match sets; and the sliders varied: those, and Banks's sharpness, which the
+cached references' keys copy to the reference (cached_reference.candidates)."""
+SLIDERS = (*MATCHED, "sharpness")
+RANGED = ("float", "int", "color")
+
+
+def _unbounded(cls: type[Method]) -> Method:
+    """:func:`_declared` with every number and colour unbounded: what a match would set."""
+    free = tuple(
+        replace(p, minimum=None, maximum=None) if p.kind in RANGED else p for p in cls.parameters
+    )
+    return _declared_class(cls, free)(None, None)
+
+
+def _slider(declared: Parameter) -> st.SearchStrategy:
+    """Values across ``declared``'s whole slider: its ends, its default, and between."""
+    if declared.kind == "choice":
+        return st.sampled_from(declared.choices)
+    if declared.kind == "color":
+        return st.tuples(*[st.floats(declared.minimum, declared.maximum)] * 3)
+    ends = st.sampled_from([declared.minimum, declared.maximum, declared.default])
+    if declared.log:
+        low, high = math.log(declared.minimum), math.log(declared.maximum)
+        between = st.floats(low, high).map(
+            lambda x: min(max(math.exp(x), declared.minimum), declared.maximum)
+        )
+    else:
+        between = st.floats(declared.minimum, declared.maximum)
+    return st.one_of(ends, between)
+
+
+SOURCES = [
+    (cls.name, p)
+    for cls in available_methods().values()
+    for p in cls.parameters
+    if p.name in SLIDERS and p.kind in (*RANGED, "choice")
+]
+
+
+@st.composite
+def _source_values(draw) -> tuple[str, dict[str, object]]:
+    """A registered method and values of its matched parameters from their sliders."""
+    name = draw(st.sampled_from(sorted({name for name, _ in SOURCES})))
+    declared = [p for n, p in SOURCES if n == name]
+    return name, {p.name: draw(_slider(p)) for p in declared}
+
+
+def _assert_inside_and_said(bounded: Method, free: Method, line: str | None) -> None:
+    """``bounded`` holds ``free``'s matched values clamped to its range; the line says so."""
+    for declared in bounded.values:
+        if declared.name not in MATCHED or declared.kind not in RANGED:
+            continue
+        got, wanted = bounded.values[declared.name], free.values[declared.name]
+        low, high = declared.minimum, declared.maximum
+        if declared.kind == "color":
+            assert got == tuple(min(max(c, low), high) for c in wanted), declared.name
+        else:
+            assert got == min(max(wanted, low), high), (bounded.name, declared.name, wanted)
+        if got != wanted:
+            assert line is not None and "clamped from" in line, (bounded.name, declared.name)
+
+
+@FUZZ
+@given(_source_values(), st.sampled_from([4, 16, 64, 256, 1024, 4096]))
+def test_every_match_from_every_slider_value_stays_in_range_and_says_so(source_values, cube):
+    """Every registered method as the source, any value of any matched parameter's slider,
+    every registered method as the target: directly (compare, cached references) and
+    through the ground truth's N (grid, split screen, switching), and the reference's keys
+    the grid looks cached references up by: no exit, every value set inside the target's
+    range, and a clamp said in the target's line."""
+    name, values = source_values
+    classes = available_methods()
+    for target_cls in classes.values():
+        if target_cls.name == name:
+            continue
+        source, bounded, free = (
+            _declared(classes[name]),
+            _declared(target_cls),
+            _unbounded(target_cls),
+        )
+        source.values.update(values)
+        line = match_glossiness(bounded, source, cube)
+        match_glossiness(free, source, cube)
+        _assert_inside_and_said(bounded, free, line)
+
+    truth = ground_truth_class().name
+    tiles = _tiles()
+    tiles[name].values.update(values)
+    references = CachedReferences(None, None, _declared_class(ground_truth_class()))
+    if tiles[name].reflectance in references.truth.models:  # find()'s keys
+        for candidate in references.candidates(tiles[truth], tiles[name], None, cube):
+            references.reference.values.update(candidate)
+    lines = match_through(list(tiles.values()), tiles[name], tiles[truth], cube)
+    for target, method in tiles.items():
+        if target in (name, truth):
+            continue
+        free = _unbounded(classes[target])
+        match_glossiness(free, tiles[truth], cube)  # what the hub's values would give it
+        _assert_inside_and_said(method, free, lines.get(target))
+
+
+def test_kautz_default_matched_to_rsibr_is_clamped_to_5000_and_said():
+    """The grid's fault: kautz's b = 1.7 on a 256² cube is N ≈ 8651, above rsibr's 5000."""
+    tiles = _tiles()
+    lines = match_through(list(tiles.values()), tiles["kautz"], tiles["reference"], 256)
+    assert tiles["reference"].values["phong_exponent"] == pytest.approx(8650.8, abs=0.1)
+    assert tiles["rsibr"].values["phong_exponent"] == 5000.0
+    assert lines["rsibr"].startswith("N = 5000 (clamped from 8651) copied from reference; ")
+    assert "N = 8650.8 matched to b = 1.7 on a 256² cube" in lines["rsibr"]
+    assert lines["hwconv"].startswith("N = 8650.8 matched to b = 1.7")  # the hub's N, as it is
+    assert lines["mirror"] is None  # nothing glossy to match
+
+
+def test_a_copy_beyond_the_targets_range_is_clamped_and_said():
+    class _Narrow(_Phong):
+        name = "narrow"
+        parameters = (Parameter("phong_exponent", "float", 100.0, 1.0, 5000.0),)
+
+    wide, narrow = _Phong(None, None), _Narrow(None, None)
+    wide.values["phong_exponent"] = 8000.0
+    assert match_glossiness(narrow, wide, 256) == "N = 5000 (clamped from 8000) copied from phong"
+    assert narrow.values["phong_exponent"] == 5000.0

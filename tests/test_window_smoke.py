@@ -441,6 +441,34 @@ def test_clicking_a_grid_tile_makes_its_method_the_main_view(xvfb, tmp_path):
     assert not record["grid"]["on"] and record["render_size"] == list(WINDOW)
 
 
+def test_kautz_matched_beyond_a_tiles_range_is_clamped_not_an_exit(xvfb, tmp_path):
+    """With fresh settings `view --method kautz --grid` exited with status 2: kautz's b = 1.7
+    on the 256² cube matches N ≈ 8651, which the grid copied unclamped to rsibr (N in
+    [1, 5000]). Every tile renders, each value inside its declared range; the split screen
+    against rsibr says the match was clamped."""
+    runs = {}
+    for run, view in {"grid": ("--grid",), "split": ("--compare", "rsibr")}.items():
+        config, probe = tmp_path / run, tmp_path / f"{run}.json"
+        config.mkdir()
+        options = ("--method", "kautz", *view, "--hide-panels", "--frames", "2")
+        result = run_view(config, xvfb, *options, probe=probe)
+        assert result.returncode == 0, result.stderr
+        assert envstudio_lines(result.stderr) == [], result.stderr
+        runs[run] = json.loads(probe.read_text())
+    grid = runs["grid"]["grid"]
+    assert grid["on"] and [tile["name"] for tile in grid["tiles"]] == list(available_methods())
+    for tile in grid["tiles"]:
+        for declared in method_class(tile["name"]).parameters:
+            if declared.kind == "float" and declared.maximum is not None:
+                value = tile["values"][declared.name]
+                assert declared.minimum <= value <= declared.maximum, (tile["name"], declared)
+    tiles = {tile["name"]: tile["values"] for tile in grid["tiles"]}
+    assert tiles["kautz"]["lod_bias"] == 1.7 and tiles["rsibr"]["phong_exponent"] == 5000.0
+    split = runs["split"]
+    assert split["compare"]["other"] == "rsibr" and split["method"] == "kautz"
+    assert split["match_note"].startswith("N = 5000 (clamped from 8651)"), split["match_note"]
+
+
 def changed_values(method: str) -> dict[str, object]:
     """Non-default values of ``method``'s colours and of its first float parameter (a
     slider: no rebake), from its declarations."""

@@ -8,10 +8,10 @@ pixels, origin bottom-left), the size the scene was rendered at, the window and
 framebuffer sizes, and each panel's window rectangle, whether it is docked and
 whether it is on show (a tab behind another is not).
 It records the method on show with its parameter values, the display values, the
-camera's azimuth and elevation and the split screen's state.
-In the grid view it records the tiles (method, GL viewport, render size), the tile
-fraction, the labels' boxes (window points), each tile's label numbers and the status
-line's grid text.
+camera's azimuth and elevation, the split screen's state and its glossiness match note.
+In the grid view it records the tiles (method, GL viewport, render size, parameter
+values), the tile fraction, the labels' boxes (window points), each tile's label numbers
+and the status line's grid text.
 The window tests (tests/test_window_smoke.py) read it beside the screenshot.
 
 ``ENVSTUDIO_PROBE_CLICK=FRAME,X,Y`` presses and releases the left button at window
@@ -85,11 +85,17 @@ class ProbedViewer(app.Viewer):
             "display": self.session.renderer.display.as_dict(),
             "camera": [self.session.camera.azimuth, self.session.camera.elevation],
             "compare": self.compare.as_settings(),
+            "match_note": self.compare.match_note,
             "grid": {
                 "on": self.grid.on,
                 "fraction": self.grid.scale.fraction,
                 "tiles": [
-                    {"name": t.name, "viewport": list(t.viewport), "size": list(t.render_size)}
+                    {
+                        "name": t.name,
+                        "viewport": list(t.viewport),
+                        "size": list(t.render_size),
+                        "values": self.session.method(t.name).values.as_dict(),
+                    }
                     for t in self.grid.tiles
                 ],
                 "labels": [list(box) for box in labels],

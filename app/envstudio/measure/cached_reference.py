@@ -52,7 +52,7 @@ from envstudio.measure.ground_truth_cache import (
     saved_sizes,
     scene_digest,
 )
-from envstudio.measure.matching import match_glossiness
+from envstudio.measure.matching import assign_clamped, match_glossiness
 
 SIGNIFICANT_DIGITS = (4, 3)
 """Roundings of a derived Phong exponent also tried (a ``compare --param`` value)."""
@@ -192,7 +192,9 @@ class CachedReferences:
         probe["model"] = method.reflectance
         for declared in method.values:
             if declared.name in probe and declared.name != "model":
-                probe[declared.name] = method.values[declared.name]
+                # clamped to the reference's range (a plugin's may be wider): such a key
+                # is never found, but the other tiles' lookups go on
+                assign_clamped(self.reference, declared.name, method.values[declared.name])
         match_glossiness(self.reference, method, cube_size)
         derived = probe.as_dict()
         exponents = []

@@ -19,26 +19,78 @@ matched b at level mode gives 19.8 dB against the reference. Bias mode gives
 16.4 dB at b = 0, the mirror (studies/kautz-border-and-sun). The reverse match, N from a mip
 method's b, takes b as a level too; it leaves that method's ``lod_mode`` as it
 is and says so in its line when that is ``bias``.
+
+Every value a match sets, converted or copied, is clamped to the range the target
+declares (:func:`assign_clamped`): a fitted or copied value beyond it (kautz's
+default b = 1.7 on a 256² cube is N ≈ 8651, above rsibr's 5000) is set to the
+nearest end, and the match line says so ("N = 5000 (clamped from 8651)"), never
+a :class:`ParameterError`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
-import numpy as np
-
 from envstudio.core.ggx import alpha_for_exponent, exponent_for_alpha
+from envstudio.core.parameters import Parameter
 from envstudio.engine.method import Method
+from envstudio.errors import ParameterError
 from envstudio.prefilter.glossiness import exponent_for_lod_bias, lod_bias_for_exponent
 
 SHARED = ("fresnel", "kd", "phong_exponent", "lod_bias", "roughness")
 MATCH_LOD_MODE = "level"
 """The ``lod_mode`` a mip method is matched at: b is then the level the fit relates to N."""
+GLOSSY = ("phong_exponent", "lod_bias", "roughness")
+"""The glossiness parameters a match converts or copies."""
+SYMBOLS = {"phong_exponent": "N", "lod_bias": "b", "roughness": "alpha"}
+"""How a match line names a parameter."""
 
 
-def _clamped(method: Method, name: str, value: float) -> float:
-    declared = next(p for p in method.values if p.name == name)
-    return float(np.clip(value, declared.minimum, declared.maximum))
+def _clamp(declared: Parameter, value: object) -> tuple[object, bool]:
+    """``value`` moved into ``declared``'s range, and whether it was outside: a number to the
+    nearest end, each of a colour's components; anything else as it is."""
+    low = -math.inf if declared.minimum is None else declared.minimum
+    high = math.inf if declared.maximum is None else declared.maximum
+    if declared.kind == "color" and isinstance(value, (tuple, list)):
+        inside = tuple(min(max(float(c), low), high) for c in value)
+        return inside, inside != tuple(float(c) for c in value)
+    if declared.kind in ("float", "int") and isinstance(value, (int, float)):
+        inside = min(max(value, low), high)
+        return (round(inside) if declared.kind == "int" else inside), inside != value
+    return value, False
+
+
+def assign_clamped(target: Method, name: str, value: object) -> str:
+    """Set ``target``'s ``name`` to ``value``, clamped to the range ``target`` declares.
+
+    Parameters
+    ----------
+    target
+        The method whose value is set; it declares ``name``.
+    name
+        The parameter.
+    value
+        The matched value: converted from another method's, or copied from it.
+
+    Returns
+    -------
+    str
+        Empty when ``target`` took ``value`` as it is; else what happened, to add to a match
+        line: ``" (clamped from 8651)"``, or, for a choice ``target`` lacks or a value it
+        cannot take at all (NaN), ``" (kept: no lod_mode=bias)"`` with its value left as it was.
+    """
+    declared = next(p for p in target.values if p.name == name)
+    inside, clamped = _clamp(declared, value)
+    try:
+        target.values[name] = inside
+    except ParameterError:  # a choice it lacks, NaN
+        return f" (kept: no {name}={value})"
+    if not clamped:
+        return ""
+    if declared.kind == "color":
+        return f" (clamped from {', '.join(f'{c:.4g}' for c in value)})"
+    return f" (clamped from {value:.4g})"
 
 
 def _match_at_level(mip_method: Method) -> str:
@@ -57,7 +109,8 @@ def _match_at_level(mip_method: Method) -> str:
     if "lod_mode" not in mip_method.values:
         return ""
     before = mip_method.values["lod_mode"]
-    mip_method.values["lod_mode"] = MATCH_LOD_MODE
+    if assign_clamped(mip_method, "lod_mode", MATCH_LOD_MODE):
+        return f", at lod_mode={before}: it has no lod_mode={MATCH_LOD_MODE}"
     if before == MATCH_LOD_MODE:
         return f", matched at lod_mode={MATCH_LOD_MODE}"
     return (
@@ -104,36 +157,56 @@ def match_glossiness(target: Method, source: Method, cube_size: int) -> str | No
     Returns
     -------
     str or None
-        One line saying how the glossiness was matched, or None when it was not converted.
+        One line saying how the glossiness was matched and what was clamped, or None when
+        nothing was converted or clamped (values copied as they are).
     """
-    for name in ("fresnel", "kd"):
-        if name in source.values and name in target.values:
-            target.values[name] = source.values[name]
+    material = _copy(target, source, ("fresnel", "kd"))
     line = match_roughness(target, source)
     if line is not None:
-        return line
+        return _joined(line, material)
     source_b = "lod_bias" in source.values and "phong_exponent" not in source.values
     target_b = "lod_bias" in target.values and "phong_exponent" not in target.values
     if source_b == target_b:
-        for name in ("phong_exponent", "lod_bias", "lod_mode"):
-            if name in source.values and name in target.values:
-                target.values[name] = source.values[name]
-        return None
+        return _joined(
+            None, material + _copy(target, source, ("phong_exponent", "lod_bias", "lod_mode"))
+        )
     if target_b and "phong_exponent" in source.values:
         exponent = float(source.values["phong_exponent"])
-        fitted = float(lod_bias_for_exponent(exponent, cube_size))
-        target.values["lod_bias"] = b = _clamped(target, "lod_bias", fitted)
-        clamp = "" if b == fitted else f" (fit {fitted:.3f}, clamped)"
-        line = f"b = {b:.3f} matched to N = {exponent:g} on a {cube_size}² cube{clamp}"
-        return line + _match_at_level(target)
+        clamp = assign_clamped(
+            target, "lod_bias", float(lod_bias_for_exponent(exponent, cube_size))
+        )
+        b = target.values["lod_bias"]
+        line = f"b = {b:.3f}{clamp} matched to N = {exponent:g} on a {cube_size}² cube"
+        return _joined(line + _match_at_level(target), material)
     if source_b and "phong_exponent" in target.values:
         bias = float(source.values["lod_bias"])
         fitted = float(exponent_for_lod_bias(bias, cube_size))
-        target.values["phong_exponent"] = n = _clamped(target, "phong_exponent", fitted)
-        clamp = "" if n == fitted else f" (fit {fitted:.1f}, clamped)"
-        line = f"N = {n:.1f} matched to b = {bias:g} on a {cube_size}² cube{clamp}"
-        return line + _hardware_lod_caveat(source)
-    return None
+        clamp = assign_clamped(target, "phong_exponent", fitted)
+        n = target.values["phong_exponent"]
+        line = f"N = {n:.5g}{clamp} matched to b = {bias:g} on a {cube_size}² cube"
+        return _joined(line + _hardware_lod_caveat(source), material)
+    return _joined(None, material)
+
+
+def _copy(target: Method, source: Method, names: Sequence[str]) -> list[str]:
+    """Copy ``names`` that both declare from ``source`` to ``target``, each clamped to
+    ``target``'s range (:func:`assign_clamped`); what was clamped or kept, one item each
+    (``"N = 5000 (clamped from 8651) copied from reference"``)."""
+    notes = []
+    for name in names:
+        if name in source.values and name in target.values:
+            note = assign_clamped(target, name, source.values[name])
+            if note:
+                shown = target.values[name]
+                value = f"{shown:.5g}" if isinstance(shown, float) else str(shown)
+                notes.append(f"{SYMBOLS.get(name, name)} = {value}{note} copied from {source.name}")
+    return notes
+
+
+def _joined(line: str | None, notes: list[str]) -> str | None:
+    """A match line with the copies' notes after it (None: neither)."""
+    parts = ([line] if line is not None else []) + notes
+    return "; ".join(parts) if parts else None
 
 
 def match_roughness(target: Method, source: Method) -> str | None:
@@ -154,17 +227,18 @@ def match_roughness(target: Method, source: Method) -> str | None:
     target_alpha, source_alpha = "roughness" in target.values, "roughness" in source.values
     if target_alpha and not source_alpha and "phong_exponent" in source.values:
         exponent = float(source.values["phong_exponent"])
-        target.values["roughness"] = alpha = _clamped(
-            target, "roughness", alpha_for_exponent(exponent)
-        )
-        return f"alpha = {alpha:.4g} matched to N = {exponent:g} (alpha = sqrt(2 / (4N + 2)))"
+        clamp = assign_clamped(target, "roughness", float(alpha_for_exponent(exponent)))
+        alpha = target.values["roughness"]
+        return f"alpha = {alpha:.4g}{clamp} matched to N = {exponent:g} {ALPHA_OF_N}"
     if source_alpha and not target_alpha and "phong_exponent" in target.values:
         alpha = float(source.values["roughness"])
-        fitted = exponent_for_alpha(alpha)
-        target.values["phong_exponent"] = n = _clamped(target, "phong_exponent", fitted)
-        clamp = "" if n == fitted else f" (exactly {fitted:.4g}, clamped)"
-        return f"N = {n:.4g} matched to alpha = {alpha:g}{clamp} (alpha = sqrt(2 / (4N + 2)))"
+        clamp = assign_clamped(target, "phong_exponent", float(exponent_for_alpha(alpha)))
+        n = target.values["phong_exponent"]
+        return f"N = {n:.5g}{clamp} matched to alpha = {alpha:g} {ALPHA_OF_N}"
     return None
+
+
+ALPHA_OF_N = "(alpha = sqrt(2 / (4N + 2)))"
 
 
 def match_through(
@@ -193,15 +267,24 @@ def match_through(
     Returns
     -------
     dict of str to str or None
-        Each matched target's name → its match line (:func:`match_glossiness`).
+        Each matched target's name → its match line (:func:`match_glossiness`). A target
+        with a glossiness parameter matched through ``hub`` has the hub's line too (what
+        its N came from): alone where it took the hub's N as it is, else after its own
+        (``"N = 5000 (clamped from 8651) copied from reference; reference: N = 8650.8
+        matched to b = 1.7 on a 256² cube"``).
     """
     lines: dict[str, str | None] = {}
+    hub_line = None
     if hub is not None and source is not hub:
-        lines[hub.name] = match_glossiness(hub, source, cube_size)
+        lines[hub.name] = hub_line = match_glossiness(hub, source, cube_size)
     via = hub if hub is not None else source
     for target in targets:
         if target is not source and target is not via:
-            lines[target.name] = match_glossiness(target, via, cube_size)
+            line = match_glossiness(target, via, cube_size)
+            glossy = any(name in target.values for name in GLOSSY)
+            if hub_line is not None and glossy:  # what the hub's N, matched or copied, came from
+                line = hub_line if line is None else f"{line}; {via.name}: {hub_line}"
+            lines[target.name] = line
     return {target.name: lines[target.name] for target in targets if target.name in lines}
 
 
