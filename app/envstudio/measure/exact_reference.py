@@ -23,8 +23,10 @@ What it leaves out is stated and checked: the spectral sums drop the lobe below
 into sub-texels finer than the lobe) at a fixed set of the samples and reports the median
 and largest relative difference.
 
-Microfacet (GGX) and Banks depend on (n, v) or (v, t) together: they have no exact
-evaluation yet, and :data:`EXACT_MODELS` says so.
+The ``microfacet`` model (GGX) shares the diffuse term; its glossy lobe depends on (n, v)
+together, so no prefiltered map holds it: measure/exact_lobes.py integrates it per sample
+on the GPU, and :func:`checked_error` holds it against the same kind of brute-force sum.
+Banks has no exact evaluation yet, and :data:`EXACT_MODELS` says so.
 """
 
 from __future__ import annotations
@@ -36,11 +38,14 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.core import latlong
+from envstudio.core import ggx, latlong
+from envstudio.measure.exact_lobes import LobeEvaluator, LobeModel, microfacet_lobe
 from envstudio.prefilter import spectral
 
 #: The reflectance models with an exact untraced evaluation here.
-EXACT_MODELS = ("phong",)
+EXACT_MODELS = ("phong", "microfacet")
+#: The models whose glossy lobe the GPU integrates (exact_lobes.py).
+LOBE_MODELS = ("microfacet",)
 #: Rows of the spectral grid at least (N = 1's kink at the horizon wants a finer grid than
 #: its width asks for; from 128 the diffuse sum is within 1e-4 (studio) and 3.3e-4 (sunrise)
 #: of the brute force at every direction tried, as at 256).
@@ -117,15 +122,71 @@ def eq8_radiance(
         Linear radiance.
     """
     _, reflections, diffuse, glossy = eq8_terms(normals, views, fresnel, kd)
-    out = np.zeros(diffuse.shape)
-    if diffuse.any():  # k_d = 0 (a mirror-like material) skips the diffuse sums
-        out += diffuse * spectral.lobe_at(
-            radiance, 1.0, normals, min_rows=GRID_ROWS, footprint=True
-        )
+    out = diffuse_radiance(radiance, normals, diffuse)
     if glossy.any():
         out += glossy * spectral.lobe_at(
             radiance, exponent, reflections, min_rows=GRID_ROWS, footprint=True
         )
+    return out.astype(np.float32)
+
+
+def diffuse_radiance(
+    radiance: npt.ArrayLike, normals: npt.ArrayLike, weights: np.ndarray
+) -> npt.NDArray[np.float64]:
+    """(1 − F) k_d ∫ L(l) max(⟨n, l⟩, 0)/π dl for (s, 3) ``weights`` (1 − F) k_d, the same in
+    every model (seed 000 eq. 3–4; material.glsl); (s, 3) float64, zero where the weights are."""
+    out = np.zeros(weights.shape)
+    if weights.any():  # k_d = 0 (a mirror-like material) skips the diffuse sums
+        out += weights * spectral.lobe_at(
+            radiance, 1.0, normals, min_rows=GRID_ROWS, footprint=True
+        )
+    return out
+
+
+def lobe_model(values: dict[str, object]) -> LobeModel:
+    """The glossy model of the reference's ``values`` (a model in :data:`LOBE_MODELS`)."""
+    fresnel = tuple(float(c) for c in np.broadcast_to(values["fresnel"], 3))
+    alpha = ggx.alpha_for_exponent(float(values["phong_exponent"]))
+    return LobeModel(str(values["model"]), fresnel, alpha=alpha)
+
+
+def exact_radiance(
+    radiance: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    values: dict[str, object],
+    lobes: LobeEvaluator | None = None,
+) -> npt.NDArray[np.float32]:
+    """Exitant radiance of the reference's untraced model at each sample, exactly.
+
+    Parameters
+    ----------
+    radiance : (h, w, 3) array_like
+        The lat-long environment, linear radiance.
+    normals, views : (s, 3) array_like
+        As :func:`eq8_terms`.
+    values : dict
+        The reference's values: ``model`` (one of :data:`EXACT_MODELS`; phong when absent),
+        ``fresnel``, ``kd``, ``phong_exponent``.
+    lobes : LobeEvaluator or None
+        The GPU integration of a model in :data:`LOBE_MODELS` (needed for those).
+
+    Returns
+    -------
+    (s, 3) float32
+        Linear radiance.
+    """
+    model = str(values.get("model", "phong"))
+    fresnel = np.asarray(values["fresnel"], dtype=np.float64)
+    kd = np.asarray(values["kd"], dtype=np.float64)
+    if model == "phong":
+        return eq8_radiance(radiance, normals, views, fresnel, kd, float(values["phong_exponent"]))
+    if model not in LOBE_MODELS or lobes is None:
+        raise ValueError(f"model={model}: no exact evaluation here (expected {EXACT_MODELS})")
+    facing, _, diffuse, _ = eq8_terms(normals, views, fresnel, kd)
+    out = diffuse_radiance(radiance, normals, diffuse)
+    n, v = np.asarray(normals)[facing], np.asarray(views)[facing]
+    out[facing] += lobes.glossy(radiance, lobe_model(values), n, v)
     return out.astype(np.float32)
 
 
@@ -185,24 +246,47 @@ def brute_force_radiance(
     radiance: npt.ArrayLike,
     normals: npt.ArrayLike,
     views: npt.ArrayLike,
-    fresnel: npt.ArrayLike,
-    kd: npt.ArrayLike,
-    exponent: float,
+    values: dict[str, object],
 ) -> npt.NDArray[np.float64]:
-    """:func:`eq8_radiance` by a plain sum over quadrature points of every texel
+    """:func:`exact_radiance` by a plain sum over quadrature points of every texel
     (:func:`gauss_texels`, :func:`texel_split`): slow, for checks. Same parameters;
     (s, 3) float64."""
     n = np.asarray(normals, dtype=np.float64)
-    _, reflections, diffuse, glossy = eq8_terms(n, views, fresnel, kd)
+    v = np.asarray(views, dtype=np.float64)
+    exponent = float(values["phong_exponent"])
+    fresnel = np.asarray(values["fresnel"], dtype=np.float64)
+    _, reflections, diffuse, glossy = eq8_terms(n, v, fresnel, values["kd"])
     image = np.asarray(radiance, dtype=np.float32)
     out = np.zeros(diffuse.shape)
     if diffuse.any():
         out += diffuse * _lobe_sums(image, 1, n, lambda c: np.maximum(c, 0.0) / math.pi)
-    if glossy.any():
-        out += glossy * _lobe_sums(
-            image, texel_split(image.shape[0], exponent), reflections, _phong_lobe(exponent)
-        )
+    if str(values.get("model", "phong")) == "phong":
+        if glossy.any():
+            out += glossy * _lobe_sums(
+                image, texel_split(image.shape[0], exponent), reflections, _phong_lobe(exponent)
+            )
+        return out
+    model = lobe_model(values)
+    split = brute_force_split(image.shape[0], values)
+    directions, weights = gauss_texels(*image.shape[:2], split)
+    texel = np.repeat(np.repeat(image, 3 * split, axis=0), 3 * split, axis=1)
+    weighted = texel.reshape(-1, 3).astype(np.float64) * weights[:, None]
+    for k in np.nonzero(np.einsum("sk,sk->s", n, v) > 0.0)[0]:
+        for start in range(0, len(directions), _POINTS_PER_BLOCK):
+            block = slice(start, start + _POINTS_PER_BLOCK)
+            lobe = microfacet_lobe(model, n[k], v[k], directions[block])
+            out[k] += (lobe * weighted[block]).sum(axis=0)
     return out
+
+
+def brute_force_split(height: int, values: dict[str, object]) -> int:
+    """Sub-texels per texel edge of :func:`brute_force_radiance`'s glossy sum for the
+    reference's ``values``: :func:`texel_split` for Phong, each at most half of GGX's α."""
+    exponent = float(values["phong_exponent"])
+    if str(values.get("model", "phong")) == "phong":
+        return texel_split(height, exponent)
+    alpha = ggx.alpha_for_exponent(exponent)
+    return int(min(16, max(1, math.ceil(2.0 * (math.pi / height) / alpha))))
 
 
 def _phong_lobe(exponent: float):
@@ -241,13 +325,12 @@ def checked_error(
     radiance: npt.ArrayLike,
     normals: npt.ArrayLike,
     views: npt.ArrayLike,
-    values: npt.ArrayLike,
-    fresnel: npt.ArrayLike,
-    kd: npt.ArrayLike,
-    exponent: float,
+    computed: npt.ArrayLike,
+    values: dict[str, object],
     samples: int = CHECKED_SAMPLES,
 ) -> CheckedError:
-    """The relative differences of ``values`` from the brute force at up to ``samples``
+    """The relative differences of the ``computed`` (s, 3) radiance from the brute force
+    (:func:`brute_force_radiance` of the reference's ``values``) at up to ``samples``
     facing samples spread evenly through the list (deterministic; fewer where the map is
     large, to keep the check's sums under :data:`_CHECK_BUDGET`).
 
@@ -260,11 +343,12 @@ def checked_error(
     if not len(facing):
         return CheckedError(0.0, 0.0, 0)
     image = np.asarray(radiance)
-    points = 9.0 * image.shape[0] * image.shape[1] * texel_split(image.shape[0], exponent) ** 2
+    split = brute_force_split(image.shape[0], values)
+    points = 9.0 * image.shape[0] * image.shape[1] * split**2
     samples = int(min(samples, max(8, _CHECK_BUDGET // points), len(facing)))
     picked = facing[np.linspace(0, len(facing) - 1, samples).astype(int)]
-    exact = brute_force_radiance(radiance, n[picked], v[picked], fresnel, kd, exponent)
-    computed = np.asarray(values, dtype=np.float64)[picked]
+    exact = brute_force_radiance(radiance, n[picked], v[picked], values)
+    computed = np.asarray(computed, dtype=np.float64)[picked]
     scale = np.maximum(exact.max(axis=1), 1e-30)
     differences = np.abs(computed - exact).max(axis=1) / scale
     return CheckedError(float(np.median(differences)), float(differences.max()), samples)
@@ -299,8 +383,9 @@ def exact_frame(
     values: dict[str, object],
     ssaa: int,
     started: float | None = None,
+    lobes: LobeEvaluator | None = None,
 ) -> ExactFrame:
-    """The exact ``model=phong`` frame from the reflectors' surface at ``ssaa``² samples a pixel.
+    """The exact untraced frame from the reflectors' surface at ``ssaa``² samples a pixel.
 
     Parameters
     ----------
@@ -309,20 +394,19 @@ def exact_frame(
     radiance : (h, w, 3) array_like
         The lat-long environment the reference reads.
     values : dict
-        The reference's parameter values (``fresnel``, ``kd``, ``phong_exponent``).
+        The reference's parameter values (``model``, ``fresnel``, ``kd``, ``phong_exponent``).
     ssaa : int
         Samples per pixel per axis.
     started : float or None
         ``time.perf_counter()`` when the surface pass began (None: now).
+    lobes : LobeEvaluator or None
+        For a model in :data:`LOBE_MODELS`: its GPU integration.
     """
     started = time.perf_counter() if started is None else started
     covered = np.linalg.norm(normals, axis=-1) > 0.5
-    fresnel = np.asarray(values["fresnel"], dtype=np.float64)
-    kd = np.asarray(values["kd"], dtype=np.float64)
-    exponent = float(values["phong_exponent"])
     n, v = normals[covered], views[covered]
-    shaded = eq8_radiance(radiance, n, v, fresnel, kd, exponent)
-    error = checked_error(radiance, n, v, shaded, fresnel, kd, exponent)
+    shaded = exact_radiance(radiance, n, v, values, lobes)
+    error = checked_error(radiance, n, v, shaded, values)
     fine = np.zeros(normals.shape, dtype=np.float32)
     fine[covered] = shaded
     h, w = normals.shape[0] // ssaa, normals.shape[1] // ssaa

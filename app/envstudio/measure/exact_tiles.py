@@ -1,7 +1,7 @@
 """The viewer's grid tiles measured against the exact reference of the view (issue 40 item 5).
 
 For a tile of a reflectance model with an exact untraced evaluation
-(exact_reference.EXACT_MODELS), the reference is seed 000 eq. 8 at the tile's f_λ, k_d and
+(exact_reference.EXACT_MODELS), the reference is that model at the tile's f_λ, k_d and
 Phong exponent (the caller derives them as ``compare`` matches glossiness), evaluated exactly
 at ``ssaa`` × ``ssaa`` footprint samples a pixel of the tile's render size: what ``compare
 --reference exact --param trace=false --ssaa S`` takes as its reference at that size.
@@ -10,7 +10,8 @@ drawing between them:
 
 1. the reflectors' surface at the samples (engine FrameRenderer.reflector_surface), once per
    size and reference;
-2. the exact radiance (exact_reference.eq8_radiance) in chunks of :data:`CHUNK` samples,
+2. the exact radiance (exact_reference.exact_radiance) in chunks of :data:`CHUNK` samples
+   (:data:`LOBE_CHUNK` for a lobe the GPU integrates),
    averaged over each pixel's covered samples once all are done;
 3. one tile a step: its method rendered at the same samples, box-filtered as compare filters
    it (compare.footprint_filter), and measured as compare measures it: the median relative
@@ -37,12 +38,16 @@ from envstudio.engine.method import Method, Session
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.measure.cached_reference import render_finished
 from envstudio.measure.compare import footprint_filter
-from envstudio.measure.exact_reference import eq8_radiance
+from envstudio.measure.exact_lobes import LobeEvaluator
+from envstudio.measure.exact_reference import LOBE_MODELS, exact_radiance
 from envstudio.measure.stopping import median_error
 
 SSAA = 2
 """Footprint samples per pixel per axis of the tiles' reference and their methods."""
 CHUNK = 1 << 16
+#: Samples shaded a step for a model whose lobe the GPU integrates (exact_lobes.py): about a
+#: second on llvmpipe.
+LOBE_CHUNK = 1 << 12
 """Samples shaded per step."""
 
 
@@ -102,6 +107,7 @@ class ExactTiles:
         self.ssaa = ssaa
         self._ctx, self._programs = ctx, programs
         self._renderer: FrameRenderer | None = None
+        self._lobes = LobeEvaluator(ctx, programs)
         self._frames: dict[str, _Frame] = {}
         self._queue: list[tuple[str, Method, _Frame]] = []
 
@@ -166,17 +172,11 @@ class ExactTiles:
         normals, views = frame.normals[frame.covered], frame.views[frame.covered]
         done = sum(len(chunk) for chunk in frame.shaded)
         if done < len(normals):
-            chunk = slice(done, done + CHUNK)
-            values = frame.values
+            size = LOBE_CHUNK if frame.values.get("model") in LOBE_MODELS else CHUNK
+            chunk = slice(done, done + size)
+            radiance = session.scene.environment.radiance
             frame.shaded.append(
-                eq8_radiance(
-                    session.scene.environment.radiance,
-                    normals[chunk],
-                    views[chunk],
-                    np.asarray(values["fresnel"], dtype=np.float64),
-                    np.asarray(values["kd"], dtype=np.float64),
-                    float(values["phong_exponent"]),
-                )
+                exact_radiance(radiance, normals[chunk], views[chunk], frame.values, self._lobes)
             )
             return
         samples = np.zeros(frame.normals.shape, dtype=np.float32)
@@ -206,4 +206,5 @@ class ExactTiles:
         if self._renderer is not None:
             self._renderer.release()
         self._renderer = None
+        self._lobes.release()
         self.clear()

@@ -25,6 +25,7 @@ from envstudio.engine.method import Method
 from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.measure import ground_truth_cache
+from envstudio.measure.exact_lobes import LobeEvaluator
 from envstudio.measure.exact_reference import CheckedError, exact_frame
 from envstudio.measure.ground_truth import (
     SCENE_EFFECTS,
@@ -315,14 +316,19 @@ def exact_run(
     started = time.perf_counter()
     fine = (size[0] * ssaa, size[1] * ssaa)
     normals, views = session.renderer.reflector_surface(session.gpu_scene, session.camera, fine)
-    frame = exact_frame(
-        normals,
-        views,
-        session.scene.environment.radiance,
-        reference.values.as_dict(),
-        ssaa,
-        started,
-    )
+    lobes = LobeEvaluator(session.ctx, session.programs)
+    try:
+        frame = exact_frame(
+            normals,
+            views,
+            session.scene.environment.radiance,
+            reference.values.as_dict(),
+            ssaa,
+            started,
+            lobes,
+        )
+    finally:
+        lobes.release()
     if not frame.mask.any():
         empty_mask(session)
     outside = np.zeros_like(frame.hdr) if background is None else background

@@ -445,7 +445,12 @@ class GridMetrics:
         exponent, hub_exponent = float(values["phong_exponent"]), hub.values["phong_exponent"]
         if math.isclose(exponent, hub_exponent, rel_tol=ROUND_TRIP):
             exponent = float(hub_exponent)
-        return {"fresnel": values["fresnel"], "kd": values["kd"], "phong_exponent": exponent}
+        return {
+            "model": method.reflectance,
+            "fresnel": values["fresnel"],
+            "kd": values["kd"],
+            "phong_exponent": exponent,
+        }
 
     def _measure_exact(self, state: GridState, session: Session) -> None:
         measured = self._exact.step(session, session.renderer.display.as_dict())

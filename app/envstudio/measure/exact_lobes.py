@@ -1,0 +1,256 @@
+"""The exact untraced glossy term of the models whose lobe depends on (n, v) or (v, t):
+``microfacet`` and ``banks`` (the reference's models 1 and 2).
+
+Their lobe is not a function of one direction, so no prefiltered map holds it; at each
+footprint sample the term is the integral of the environment against the lobe,
+
+    microfacet:  ∫ L(l) D(h) G2(l, v) F(v·h) / (4 ⟨n, v⟩) dl over ⟨n, l⟩ > 0,
+    banks:       F(⟨n, v⟩) c ∫ L(l) f_banks(⟨l, t⟩, ⟨v, t⟩) [max(⟨n, l⟩, 0)] dl,
+
+(shaders/reference/material.glsl, accumulate.glsl), the environment a function constant
+over each lat-long texel, as the Monte Carlo reference sees it. A compute pass
+(shaders/reference/exact_lobe.glsl) evaluates it by seed 004 §5.1's descent of the
+environment's mip pyramid (prefilter.hierarchical.source_pyramid): a node is taken at its
+radiance centroid where the lobe is smooth over it (its cap, in half-vector space for GGX,
+is under :data:`ACCEPT` times the lobe's width at its distance), skipped where the lobe is
+zero over it, refined otherwise, and a texel still refined is cut into parts finer than the
+lobe. What that leaves out is measured, not assumed: :func:`checked_error` holds the
+result against a plain sum over Gauss points of every texel (:func:`brute_force_lobe`), the
+same anchor as the ``phong`` model's (measure/exact_reference.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+import numpy.typing as npt
+
+from envstudio.core import ggx
+from envstudio.gpu.programs import ProgramLibrary
+from envstudio.gpu.uniforms import set_uniform
+from envstudio.prefilter.hierarchical import source_pyramid
+
+#: A node is accepted when its cap is under this fraction of the lobe's width there.
+ACCEPT = 0.1
+#: Iterations a dispatch spends on a sample at most (llvmpipe ends an invocation's loops
+#: after 65 535 iterations; a texel cut into parts takes up to 16² at once).
+BUDGET = 60000
+#: Samples per dispatch.
+SAMPLES_PER_DISPATCH = 1 << 14
+#: Nodes of the level the descent starts at, at least.
+START_NODES = 32
+_MODELS = {"microfacet": 1, "banks": 2}
+#: The pyramid's textures in PyramidTextures.textures, by their names in exact_lobe.glsl.
+TEXTURE_NAMES = ("u_radiance", "u_direction", "u_centroid", "u_spread", "u_spread_rest")
+
+
+@dataclass(frozen=True)
+class LobeModel:
+    """The parameters of one glossy model, as the reference's values give them.
+
+    Attributes
+    ----------
+    name : str
+        ``microfacet`` or ``banks``.
+    fresnel : (3,) tuple of float
+        f_λ, linear RGB.
+    alpha : float
+        GGX roughness (microfacet).
+    sharpness : float
+        Banks' s (banks).
+    normalize, self_shadowing : bool
+        Banks' ``normalize`` (divide by the lobe's integral) and the ⟨n, l⟩ factor.
+    """
+
+    name: str
+    fresnel: tuple[float, float, float]
+    alpha: float = 0.0
+    sharpness: float = 0.0
+    normalize: bool = False
+    self_shadowing: bool = False
+
+
+class PyramidTextures:
+    """The environment's pyramid on the GPU: per level W and ρ, d, and the centroid s.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    radiance : (h, w, 3) array_like
+        The lat-long environment, linear radiance; h and w powers of two (w = 2h).
+    """
+
+    def __init__(self, ctx: moderngl.Context, radiance: npt.ArrayLike):
+        pyramid = source_pyramid(radiance)
+        h, w = pyramid.shapes[0]
+        self.size = (w, h)
+        self.levels = levels = len(pyramid.shapes)
+        self.start_level = next(
+            (k for k in range(levels - 1, -1, -1) if np.prod(pyramid.shapes[k]) >= START_NODES),
+            0,
+        )
+        # a texel's own half-diagonal, so a level-0 cap covers the texel's area
+        texel = math.hypot(0.5 * math.pi / h, math.pi / w)
+        textures = [ctx.texture((w, h), 4, dtype="f4") for _ in range(5)]
+        for texture in textures:  # allocates the chain; every level is written below
+            texture.build_mipmaps(0, levels - 1)
+        for level, (rows, cols) in enumerate(pyramid.shapes):
+            cos_rho, sin_rho = pyramid.radii[level]
+            rho = np.arctan2(sin_rho, cos_rho) * (level > 0) + texel
+            planes = (
+                (*pyramid.radiance[level], rho),
+                (*pyramid.directions[level], np.zeros_like(rho)),
+                (*pyramid.samples[level], np.zeros_like(rho)),
+                tuple(pyramid.spreads[level][:4]),
+                (*pyramid.spreads[level][4:], np.zeros_like(rho), np.zeros_like(rho)),
+            )
+            for texture, plane in zip(textures, planes, strict=True):
+                data = np.stack(plane, axis=-1).reshape(rows, cols, 4).astype(np.float32)
+                texture.write(np.ascontiguousarray(data), level=level)
+        for texture in textures:
+            texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
+        self.textures = textures
+
+    def release(self) -> None:
+        for texture in self.textures:
+            texture.release()
+
+
+class LobeEvaluator:
+    """:func:`glossy_term` on one context, with the pyramid of the last environment kept.
+
+    Parameters
+    ----------
+    ctx : moderngl.Context
+    programs : ProgramLibrary
+    """
+
+    def __init__(self, ctx: moderngl.Context, programs: ProgramLibrary):
+        self.ctx, self.programs = ctx, programs
+        self._radiance: np.ndarray | None = None
+        self._textures: PyramidTextures | None = None
+
+    def glossy(
+        self,
+        radiance: np.ndarray,
+        model: LobeModel,
+        normals: npt.ArrayLike,
+        views: npt.ArrayLike,
+        tangents: npt.ArrayLike | None = None,
+    ) -> npt.NDArray[np.float64]:
+        """:func:`glossy_term` under the lat-long ``radiance`` (h, w, 3)."""
+        if self._radiance is not radiance:
+            self.release()
+            self._textures = PyramidTextures(self.ctx, radiance)
+            self._radiance = radiance
+        return glossy_term(self.ctx, self.programs, self._textures, model, normals, views, tangents)
+
+    def release(self) -> None:
+        """Free the pyramid's textures."""
+        if self._textures is not None:
+            self._textures.release()
+        self._radiance = self._textures = None
+
+
+def glossy_term(
+    ctx: moderngl.Context,
+    programs: ProgramLibrary,
+    textures: PyramidTextures,
+    model: LobeModel,
+    normals: npt.ArrayLike,
+    views: npt.ArrayLike,
+    tangents: npt.ArrayLike | None = None,
+    accept: float = ACCEPT,
+) -> npt.NDArray[np.float64]:
+    """The glossy term of ``model`` at each sample (module docstring).
+
+    Parameters
+    ----------
+    normals, views : (s, 3) array_like
+        Unit shading normals (turned to the seen side) and directions to the camera.
+    tangents : (s, 3) array_like or None
+        Unit tangents orthogonal to the normals (banks).
+    accept : float
+        The descent's acceptance ratio (:data:`ACCEPT`).
+
+    Returns
+    -------
+    (s, 3) float64
+        Radiance; zero where ⟨n, v⟩ ≤ 0.
+    """
+    n = np.asarray(normals, dtype=np.float32).reshape(-1, 3)
+    count = len(n)
+    if not count:
+        return np.zeros((0, 3))
+
+    def padded(vectors):
+        out = np.zeros((count, 4), np.float32)
+        out[:, :3] = vectors
+        return ctx.buffer(out.tobytes())
+
+    buffers = [
+        padded(n),
+        padded(np.asarray(views, dtype=np.float32).reshape(-1, 3)),
+        padded(np.zeros((count, 3)) if tangents is None else tangents),
+        ctx.buffer(reserve=16 * count),
+    ]
+    buffers[3].clear()
+    w, h = textures.size
+    start_nodes = (w >> textures.start_level) * (h >> textures.start_level)
+    stack_size = start_nodes + 3 * textures.levels + 4
+    chunk = min(count, SAMPLES_PER_DISPATCH)
+    stacks = ctx.buffer(reserve=16 * stack_size * chunk)
+    tops = ctx.buffer(reserve=4 * chunk)
+    shader = programs.compute("reference/exact_lobe.glsl", {"STACK_SIZE": stack_size})
+    for binding, buffer in enumerate([*buffers, stacks, tops]):
+        buffer.bind_to_storage_buffer(binding)
+    for unit, texture in enumerate(textures.textures):
+        texture.use(unit)
+    uniforms = {
+        **{name: unit for unit, name in enumerate(TEXTURE_NAMES)},
+        "u_level0": textures.size,
+        "u_start_level": textures.start_level,
+        "u_model": _MODELS[model.name],
+        "u_accept": accept,
+        "u_alpha": model.alpha,
+        "u_fresnel": model.fresnel,
+        "u_sharpness": model.sharpness,
+        "u_banks_normalize": model.normalize,
+        "u_self_shadowing": model.self_shadowing,
+        "u_budget": BUDGET,
+    }
+    for name, value in uniforms.items():
+        set_uniform(shader, name, value)
+    for first in range(0, count, chunk):
+        samples = min(chunk, count - first)
+        tops.write(np.full(chunk, -1, np.int32).tobytes())
+        set_uniform(shader, "u_first_sample", first)
+        set_uniform(shader, "u_samples", samples)
+        while True:
+            shader.run(group_x=(samples + 63) // 64)
+            if not np.frombuffer(tops.read(), np.int32)[:samples].any():
+                break
+    out = np.frombuffer(buffers[3].read(), np.float32).reshape(count, 4)[:, :3]
+    for buffer in (*buffers, stacks, tops):
+        buffer.release()
+    return out.astype(np.float64)
+
+
+def microfacet_lobe(
+    model: LobeModel, normals: np.ndarray, views: np.ndarray, directions: np.ndarray
+) -> np.ndarray:
+    """D G2 F(v·h) / (4 ⟨n, v⟩) at (p, 3) directions for one sample; (p, 3) per channel."""
+    n_dot_l = directions @ normals
+    n_dot_v = float(views @ normals)
+    h = directions + views
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    d = ggx.distribution(np.maximum(h @ normals, 0.0), model.alpha)
+    g2 = ggx.smith_g2(n_dot_l, n_dot_v, model.alpha)
+    m = (1.0 - np.clip(h @ views, 0.0, 1.0)) ** 5
+    f0 = np.asarray(model.fresnel)
+    fresnel = f0 + (1.0 - f0) * m[:, None]
+    value = (d * g2 / (4.0 * n_dot_v))[:, None] * fresnel
+    return np.where((n_dot_l > 0.0)[:, None], value, 0.0)

@@ -1,0 +1,243 @@
+#version 430 core
+// The exact untraced reference's glossy term for the models whose lobe depends on (n, v) or
+// (v, t) together (measure/exact_lobes.py): microfacet (GGX D, height-correlated Smith G2,
+// Schlick F(v.h), over 4 n.v; material.glsl model 1) and banks (seed 004 section 5.3,
+// banks_brdf.glsl; accumulate.glsl model 2). One invocation a footprint sample adds
+//     sum over nodes of  f(n, v, l_node) W_node
+// to its sum: a descent of the environment's mip pyramid (seed 004 section 5.1, Figure 2;
+// prefilter/hierarchical.py builds it), from each node of the start level down. A node
+// (radiance sum W = sum L dw, mean direction d, cap radius rho about d, radiance centroid s)
+// is skipped when the lobe is zero over its cap, accepted with f at s/|s| when the lobe is
+// smooth over it (microfacet: the cap's radius in half-vector space is under u_accept times
+// max(alpha, its distance to n); banks: under u_accept times the band's half width, the cap
+// inside the band and, with self-shadowing, above the horizon), and refined into its four
+// children otherwise. A texel that is still refined is cut into k x k parts of its own
+// radiance, each taken at its centre (finer than the lobe at its distance).
+//
+// Chunks: u_first_sample.. of the sample buffers; llvmpipe ends an invocation's loops after
+// 65 535 iterations, so a dispatch spends at most u_budget on a sample and keeps its stack
+// for the next one (Python dispatches until every stack is empty).
+#if defined COMPUTE_SHADER
+layout(local_size_x = 64) in;
+#include "common/fresnel.glsl"
+#include "common/latlong.glsl"
+#include "common/banks_brdf.glsl"
+
+layout(std430, binding = 0) readonly buffer Normals { vec4 normals[]; };
+layout(std430, binding = 1) readonly buffer Views { vec4 views[]; };
+layout(std430, binding = 2) readonly buffer Tangents { vec4 tangents[]; };
+layout(std430, binding = 3) buffer Sums { vec4 sums[]; };
+// Each sample's descent, kept between dispatches: its stack of nodes (column, row, level)
+// and how many it holds (-1: not started; 0: finished).
+layout(std430, binding = 4) buffer Stacks { ivec4 stacks[]; };
+layout(std430, binding = 5) buffer Tops { int tops[]; };
+
+uniform sampler2D u_radiance;   // per level: W (rgb, radiance x sr), rho (a, radians)
+uniform sampler2D u_direction;  // per level: d (xyz, unit)
+uniform sampler2D u_centroid;   // per level: s (xyz, not normalised)
+uniform sampler2D u_spread;     // per level: S / w about s (xx, yy, zz, 2xy)
+uniform sampler2D u_spread_rest;  // per level: (2xz, 2yz)
+uniform ivec2 u_level0;         // (columns, rows) of level 0
+uniform int u_start_level;
+uniform int u_budget;           // iterations a dispatch may spend on a sample
+uniform int u_first_sample;
+uniform int u_samples;
+uniform int u_model;            // 1 microfacet, 2 banks
+uniform float u_accept;
+uniform float u_alpha;
+uniform vec3 u_fresnel;
+uniform bool u_banks_normalize;
+uniform bool u_self_shadowing;
+
+const float PI = 3.14159265358979;
+const int MAX_SPLIT = 16;
+const int STACK = STACK_SIZE;
+
+// Sample frame, set once per invocation.
+vec3 g_n;
+vec3 g_v;
+vec3 g_t;
+float g_n_dot_v;
+float g_band_lo;    // banks: the band of angle(l, t) where the lobe is nonzero
+float g_band_hi;
+float g_band_half;
+vec3 g_banks_scale;
+
+float ggx_d(float n_dot_h, float alpha) {
+    float a2 = alpha * alpha;
+    float d = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
+float ggx_g2(float n_dot_l, float n_dot_v, float alpha) {
+    float a2 = alpha * alpha;
+    float gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
+    float gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
+    return 2.0 * n_dot_l * n_dot_v / max(gl + gv, 1e-9);
+}
+
+// The lobe (BRDF times the cosine where the model has one), per channel, at unit l.
+vec3 lobe(vec3 l) {
+    if (u_model == 1) {
+        float n_dot_l = dot(g_n, l);
+        if (n_dot_l <= 0.0) return vec3(0.0);
+        vec3 h = normalize(l + g_v);
+        float d = ggx_d(max(dot(g_n, h), 0.0), u_alpha);
+        float g2 = ggx_g2(n_dot_l, g_n_dot_v, u_alpha);
+        return d * g2 * schlick_fresnel(u_fresnel, max(dot(g_v, h), 0.0)) / (4.0 * g_n_dot_v);
+    }
+    float shadow = u_self_shadowing ? max(dot(g_n, l), 0.0) : 1.0;
+    return g_banks_scale * banks_lobe(dot(l, g_t), dot(g_v, g_t)) * shadow;
+}
+
+float angle_between(vec3 a, vec3 b) { return atan(length(cross(a, b)), dot(a, b)); }
+
+// 0: the lobe is zero over the cap (d, rho); 1: smooth over it, take it at the centroid;
+// 2: refine. `split`: parts a texel edge is cut into when it is refined at level 0.
+int classify(vec3 d, float rho, out int split) {
+    float from_n = angle_between(g_n, d);
+    bool shadowed = u_model == 1 || u_self_shadowing;
+    split = 4;
+    if (shadowed && from_n - rho >= 0.5 * PI) return 0;
+    if (u_model == 1) {
+        vec3 h = normalize(d + g_v);
+        float rho_h = rho / (2.0 * max(dot(g_v, h), 1e-3));
+        float scale = u_accept * max(u_alpha, angle_between(g_n, h) - rho_h);
+        split = int(clamp(ceil(rho_h / scale), 2.0, float(MAX_SPLIT)));
+        return rho_h <= scale ? 1 : 2;
+    }
+    float from_t = angle_between(g_t, d);
+    if (from_t + rho <= g_band_lo || from_t - rho >= g_band_hi) return 0;
+    bool inside = from_t - rho >= g_band_lo && from_t + rho <= g_band_hi;
+    float scale = u_accept * g_band_half;
+    split = int(clamp(ceil(rho / scale), 2.0, float(MAX_SPLIT)));
+    return inside && rho <= scale ? 1 : 2;
+}
+
+// The lobe over a node accepted as smooth: a three-point rule that integrates every quadratic
+// exactly over the node's radiance (its centroid s and second moment S about s): the points
+// s + sqrt(2) C z_k, z_k the unit vectors at 0, 120 and 240 degrees and C C^T the part of S in
+// the plane across s (Cholesky), each read through l / |l| (the lobe taken constant along
+// rays, so the offsets along s do not matter). A texel's S is its own area's, uniform.
+vec3 node_lobe(ivec3 node) {
+    vec3 s = texelFetch(u_centroid, node.xy, node.z).xyz;
+    vec3 d = normalize(s);
+    vec3 e1 = normalize(abs(d.y) < 0.9 ? cross(d, vec3(0.0, 1.0, 0.0)) : cross(d, vec3(1.0, 0.0, 0.0)));
+    vec3 e2 = cross(d, e1);
+    float a, b, c;
+    if (node.z == 0) {  // uniform over the texel: e1 along phi, e2 along theta (up to sign)
+        float dtheta = PI / float(u_level0.y);
+        float dphi = 2.0 * PI / float(u_level0.x) * length(d.xz);
+        a = dphi * dphi / 12.0;
+        b = 0.0;
+        c = dtheta * dtheta / 12.0;
+        if (abs(d.y) >= 0.9) {  // the frame near the poles is not aligned: isotropic
+            a = c = 0.5 * (a + c);
+        }
+    } else {
+        vec4 m = texelFetch(u_spread, node.xy, node.z);
+        vec2 r = texelFetch(u_spread_rest, node.xy, node.z).xy;
+        mat3 spread = mat3(m.x, 0.5 * m.w, 0.5 * r.x,
+                           0.5 * m.w, m.y, 0.5 * r.y,
+                           0.5 * r.x, 0.5 * r.y, m.z);
+        a = dot(e1, spread * e1);
+        b = dot(e1, spread * e2);
+        c = dot(e2, spread * e2);
+    }
+    float l11 = sqrt(max(a, 0.0));
+    float l21 = l11 > 0.0 ? b / l11 : 0.0;
+    float l22 = sqrt(max(c - l21 * l21, 0.0));
+    vec3 c1 = 1.41421356 * l11 * e1 + 1.41421356 * l21 * e2;
+    vec3 c2 = 1.41421356 * l22 * e2;
+    vec3 total = lobe(normalize(s + c1));
+    total += lobe(normalize(s - 0.5 * c1 + 0.8660254 * c2));
+    total += lobe(normalize(s - 0.5 * c1 - 0.8660254 * c2));
+    return total / 3.0;
+}
+
+// Part k of texel (column, row) of level 0 with radiance sum w, cut into split x split parts.
+vec3 texel_part(ivec2 texel, vec3 w, int split, int k) {
+    vec3 radiance = w / latlong_texel_solid_angle(texel, u_level0);
+    int a = k % split;
+    int b = k / split;
+    float v0 = (float(texel.y) + float(b) / float(split)) / float(u_level0.y);
+    float v1 = (float(texel.y) + float(b + 1) / float(split)) / float(u_level0.y);
+    float omega = 2.0 * PI / float(u_level0.x * split) * 2.0 * sin(0.5 * PI * (v0 + v1))
+                  * sin(0.5 * PI * (v1 - v0));
+    float u = (float(texel.x) + (float(a) + 0.5) / float(split)) / float(u_level0.x);
+    return radiance * lobe(latlong_direction(vec2(u, 0.5 * (v0 + v1)))) * omega;
+}
+
+// A stack entry is a node (column, row, level >= 0) or part k of a texel cut into split x split
+// parts (column, row, -1 - (32 k + split)): one loop, one node or part an iteration, so that
+// the loop's count in llvmpipe (which runs 8 samples as one) is the largest sample's, never
+// the sum of nested loops over the samples that take them.
+const int PART_CODE = 32;
+
+void main() {
+    int index = int(gl_GlobalInvocationID.x);
+    if (index >= u_samples) return;
+    int sample_index = u_first_sample + index;
+    int top = tops[index];
+    if (top == 0) return;  // finished in an earlier dispatch
+    g_n = normals[sample_index].xyz;
+    g_v = views[sample_index].xyz;
+    g_n_dot_v = dot(g_n, g_v);
+    if (g_n_dot_v <= 0.0) {
+        tops[index] = 0;
+        return;
+    }
+    if (u_model == 2) {
+        g_t = tangents[sample_index].xyz;
+        float b = dot(g_v, g_t);
+        float psi;
+        banks_band(b, g_band_lo, g_band_hi, psi);
+        g_band_half = acos(u_sharpness);
+        g_banks_scale = schlick_fresnel(u_fresnel, g_n_dot_v)
+                        / (u_banks_normalize ? banks_integral(b) : 1.0);
+    }
+    // the stack lives in a local array while the sample runs, in the buffer between dispatches
+    ivec3 stack[STACK];
+    int base = index * STACK;
+    if (top < 0) {  // the first dispatch: every node of the start level
+        ivec2 start = textureSize(u_radiance, u_start_level);
+        top = start.x * start.y;
+        for (int k = 0; k < top; ++k) stack[k] = ivec3(k % start.x, k / start.x, u_start_level);
+    } else {
+        for (int k = 0; k < top; ++k) stack[k] = stacks[base + k].xyz;
+    }
+    vec3 total = vec3(0.0);
+    int budget = u_budget;
+    while (top > 0 && budget > 0) {
+        ivec3 node = stack[--top];
+        --budget;
+        if (node.z < 0) {
+            int code = -1 - node.z;
+            int split = code % PART_CODE;
+            int k = code / PART_CODE;
+            total += texel_part(node.xy, texelFetch(u_radiance, node.xy, 0).rgb, split, k);
+            if (k + 1 < split * split) stack[top++] = ivec3(node.xy, -1 - ((k + 1) * PART_CODE + split));
+            continue;
+        }
+        vec4 w = texelFetch(u_radiance, node.xy, node.z);
+        if (w.r + w.g + w.b <= 0.0) continue;
+        int split;
+        int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, split);
+        if (verdict == 0) continue;
+        if (verdict == 1) {
+            total += w.rgb * node_lobe(node);
+        } else if (node.z == 0) {
+            stack[top++] = ivec3(node.xy, -1 - split);
+        } else {
+            ivec2 child = 2 * node.xy;
+            stack[top++] = ivec3(child, node.z - 1);
+            stack[top++] = ivec3(child + ivec2(1, 0), node.z - 1);
+            stack[top++] = ivec3(child + ivec2(0, 1), node.z - 1);
+            stack[top++] = ivec3(child + ivec2(1, 1), node.z - 1);
+        }
+    }
+    for (int k = 0; k < top; ++k) stacks[base + k] = ivec4(stack[k], 0);
+    tops[index] = top;
+    sums[sample_index] += vec4(total, 0.0);
+}
+#endif
