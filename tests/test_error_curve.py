@@ -9,6 +9,7 @@ import pytest
 
 import envstudio as es
 from envstudio import api
+from envstudio.measure.error_curve import NO_EXPONENT
 from test_reference_cache import _gradient
 from test_render_gl import sphere_scene
 
@@ -30,7 +31,7 @@ def curve(sphere):
 def test_each_point_is_compares_row_at_that_exponent(sphere, curve):
     assert curve["exponents"] == list(EXPONENTS)
     assert sorted(curve["methods"]) == ["hwconv", "kautz", "mirror"]
-    assert curve["notes"] == ["banks: reflectance model banks has no exact reference yet"]
+    assert curve["notes"] == [f"banks: reflectance model banks {NO_EXPONENT}"]
     report = es.compare(
         sphere,
         ["mirror", "hwconv", "kautz"],

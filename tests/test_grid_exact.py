@@ -60,3 +60,40 @@ def test_every_phong_tile_gets_compares_exact_numbers_once_the_view_is_still(gl_
     assert all(state.numbers[name].relative_error is None for name in NAMES)
     metrics.release()
     viewer.release()
+
+
+def test_microfacet_and_banks_tiles_get_compares_exact_numbers_too(gl_ctx):
+    names = ("splitsum", "banks")
+    state = GridState()
+    state.enter()
+    state.tiles = tile_layout(list(names), (0, 0, 48, 24))
+    size = state.tiles[0].render_size
+    assert all(tile.render_size == size for tile in state.tiles)
+    session = RenderSession(sphere_scene(_gradient(), rings=16), ctx=gl_ctx)
+    plan = plan_parameters(method_classes(list(names)), ["trace=false"])
+    comparison = run_comparison(
+        session, list(names), size, plan, frames=1, warmup=0, ssaa=SSAA, reference_kind=EXACT
+    )
+    session.release()
+
+    viewer = RenderSession(sphere_scene(_gradient(), rings=16), ctx=gl_ctx)
+    hub = viewer.method("reference")
+    shown = {name: viewer.method(name) for name in names}
+    # compare's splitsum: α matched to the reference's N = 200 (the viewer starts at 0.2)
+    matched = next(r for r in comparison.results if r.name == "splitsum")
+    shown["splitsum"].values["roughness"] = matched.parameters["roughness"]
+    GlossinessLink().follow(
+        list(shown.values()), shown["splitsum"], hub, viewer.gpu_scene.cube_size
+    )
+    clock = iter(range(1000))
+    metrics = GridMetrics(viewer.renderer, "reference", clock=lambda: float(next(clock)))
+    for _ in range(40):  # per model: the surface (and tangents), the shading, the pixels
+        metrics.update(state, shown, viewer, hub, None)
+        if all(getattr(state.numbers.get(n), "psnr_db", None) is not None for n in names):
+            break
+    viewer.release()
+    for result in comparison.results:
+        numbers = state.numbers[result.name]
+        assert result.reference_model == {"splitsum": "microfacet", "banks": "banks"}[result.name]
+        assert numbers.relative_error == pytest.approx(result.median_relative_error, abs=1e-3)
+        assert numbers.psnr_db == pytest.approx(result.metrics.psnr_db, abs=1e-3)

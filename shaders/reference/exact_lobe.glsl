@@ -51,6 +51,10 @@ uniform bool u_self_shadowing;
 
 const float PI = 3.14159265358979;
 const int MAX_SPLIT = 16;
+// Banks' acceptance inside its band and across its edges, in units of u_accept times the
+// band's half width (exact_lobes.py measures what they leave).
+const float BANKS_INSIDE = 3.0;
+const float BANKS_EDGE = 0.3;
 const int STACK = STACK_SIZE;
 
 // Sample frame, set once per invocation.
@@ -106,48 +110,28 @@ int classify(vec3 d, float rho, out int split) {
         split = int(clamp(ceil(rho_h / scale), 2.0, float(MAX_SPLIT)));
         return rho_h <= scale ? 1 : 2;
     }
+    // banks: inside the band the lobe is cos(angle(l, t) - psi) - s, which the three-point
+    // rule takes exactly to third order, so nodes of a fraction of the band's width pass; its
+    // edges (and the horizon, with self-shadowing) are kinks, taken with nodes finer still
     float from_t = angle_between(g_t, d);
     if (from_t + rho <= g_band_lo || from_t - rho >= g_band_hi) return 0;
     bool inside = from_t - rho >= g_band_lo && from_t + rho <= g_band_hi;
-    float scale = u_accept * g_band_half;
+    bool horizon = u_self_shadowing && from_n + rho > 0.5 * PI;
+    float scale = (inside && !horizon ? BANKS_INSIDE : BANKS_EDGE) * u_accept * g_band_half;
     split = int(clamp(ceil(rho / scale), 2.0, float(MAX_SPLIT)));
-    return inside && rho <= scale ? 1 : 2;
+    return rho <= scale ? 1 : 2;
 }
 
-// The lobe over a node accepted as smooth: a three-point rule that integrates every quadratic
-// exactly over the node's radiance (its centroid s and second moment S about s): the points
-// s + sqrt(2) C z_k, z_k the unit vectors at 0, 120 and 240 degrees and C C^T the part of S in
-// the plane across s (Cholesky), each read through l / |l| (the lobe taken constant along
-// rays, so the offsets along s do not matter). A texel's S is its own area's, uniform.
-vec3 node_lobe(ivec3 node) {
-    vec3 s = texelFetch(u_centroid, node.xy, node.z).xyz;
-    vec3 d = normalize(s);
-    vec3 e1 = normalize(abs(d.y) < 0.9 ? cross(d, vec3(0.0, 1.0, 0.0)) : cross(d, vec3(1.0, 0.0, 0.0)));
-    vec3 e2 = cross(d, e1);
-    float a, b, c;
-    if (node.z == 0) {  // uniform over the texel: e1 along phi, e2 along theta (up to sign)
-        float dtheta = PI / float(u_level0.y);
-        float dphi = 2.0 * PI / float(u_level0.x) * length(d.xz);
-        a = dphi * dphi / 12.0;
-        b = 0.0;
-        c = dtheta * dtheta / 12.0;
-        if (abs(d.y) >= 0.9) {  // the frame near the poles is not aligned: isotropic
-            a = c = 0.5 * (a + c);
-        }
-    } else {
-        vec4 m = texelFetch(u_spread, node.xy, node.z);
-        vec2 r = texelFetch(u_spread_rest, node.xy, node.z).xy;
-        mat3 spread = mat3(m.x, 0.5 * m.w, 0.5 * r.x,
-                           0.5 * m.w, m.y, 0.5 * r.y,
-                           0.5 * r.x, 0.5 * r.y, m.z);
-        a = dot(e1, spread * e1);
-        b = dot(e1, spread * e2);
-        c = dot(e2, spread * e2);
-    }
+// The mean of the lobe over a distribution of directions with centroid s and second moment
+// (a, b; b, c) about it in the plane (e1, e2) across s: a three-point rule that integrates every
+// quadratic exactly, the points s + sqrt(2) C z_k with z_k the unit vectors at 0, 120 and 240
+// degrees and C C^T = (a, b; b, c) (Cholesky), each read through l / |l| (the lobe taken
+// constant along rays, so the offsets along s do not matter).
+vec3 three_points(vec3 s, vec3 e1, vec3 e2, float a, float b, float c) {
     float l11 = sqrt(max(a, 0.0));
     float l21 = l11 > 0.0 ? b / l11 : 0.0;
     float l22 = sqrt(max(c - l21 * l21, 0.0));
-    vec3 c1 = 1.41421356 * l11 * e1 + 1.41421356 * l21 * e2;
+    vec3 c1 = 1.41421356 * (l11 * e1 + l21 * e2);
     vec3 c2 = 1.41421356 * l22 * e2;
     vec3 total = lobe(normalize(s + c1));
     total += lobe(normalize(s - 0.5 * c1 + 0.8660254 * c2));
@@ -155,17 +139,40 @@ vec3 node_lobe(ivec3 node) {
     return total / 3.0;
 }
 
-// Part k of texel (column, row) of level 0 with radiance sum w, cut into split x split parts.
+// The lobe over a node of level >= 1 accepted as smooth, over the node's radiance: its
+// centroid s and second moment S about s (prefilter/hierarchical.py), S's part across s.
+vec3 node_lobe(ivec3 node) {
+    vec3 s = texelFetch(u_centroid, node.xy, node.z).xyz;
+    vec3 d = normalize(s);
+    vec3 e1 = normalize(abs(d.y) < 0.9 ? cross(d, vec3(0.0, 1.0, 0.0)) : cross(d, vec3(1.0, 0.0, 0.0)));
+    vec3 e2 = cross(d, e1);
+    vec4 m = texelFetch(u_spread, node.xy, node.z);
+    vec2 r = texelFetch(u_spread_rest, node.xy, node.z).xy;
+    mat3 spread = mat3(m.x, 0.5 * m.w, 0.5 * r.x,
+                       0.5 * m.w, m.y, 0.5 * r.y,
+                       0.5 * r.x, 0.5 * r.y, m.z);
+    return three_points(s, e1, e2, dot(e1, spread * e1), dot(e1, spread * e2), dot(e2, spread * e2));
+}
+
+// Part k of texel (column, row) of level 0, cut into split x split parts (split 1: the whole
+// texel), radiance constant over it: the lobe's integral over the part times that radiance.
+// The part's centroid and second moment are its area's: theta's mean weighted by sin(theta),
+// and the variances (theta1 - theta0)^2 / 12 along theta, (sin(theta) dphi)^2 / 12 along phi.
 vec3 texel_part(ivec2 texel, vec3 w, int split, int k) {
     vec3 radiance = w / latlong_texel_solid_angle(texel, u_level0);
-    int a = k % split;
-    int b = k / split;
-    float v0 = (float(texel.y) + float(b) / float(split)) / float(u_level0.y);
-    float v1 = (float(texel.y) + float(b + 1) / float(split)) / float(u_level0.y);
-    float omega = 2.0 * PI / float(u_level0.x * split) * 2.0 * sin(0.5 * PI * (v0 + v1))
-                  * sin(0.5 * PI * (v1 - v0));
-    float u = (float(texel.x) + (float(a) + 0.5) / float(split)) / float(u_level0.x);
-    return radiance * lobe(latlong_direction(vec2(u, 0.5 * (v0 + v1)))) * omega;
+    float t0 = PI * (float(texel.y) + float(k / split) / float(split)) / float(u_level0.y);
+    float t1 = t0 + PI / float(u_level0.y * split);
+    float dphi = 2.0 * PI / float(u_level0.x * split);
+    float omega = dphi * (cos(t0) - cos(t1));
+    float theta = (sin(t1) - sin(t0) - t1 * cos(t1) + t0 * cos(t0)) / (cos(t0) - cos(t1));
+    float u = (float(texel.x) + (float(k % split) + 0.5) / float(split)) / float(u_level0.x);
+    vec3 d = latlong_direction(vec2(u, theta / PI));
+    float phi = 2.0 * PI * (u - 0.5);
+    vec3 along_theta = vec3(cos(theta) * sin(phi), -sin(theta), -cos(theta) * cos(phi));
+    vec3 along_phi = vec3(cos(phi), 0.0, sin(phi));
+    float a = (sin(theta) * dphi) * (sin(theta) * dphi) / 12.0;
+    float c = (t1 - t0) * (t1 - t0) / 12.0;
+    return radiance * three_points(d, along_phi, along_theta, a, 0.0, c) * omega;
 }
 
 // A stack entry is a node (column, row, level >= 0) or part k of a texel cut into split x split
@@ -225,7 +232,7 @@ void main() {
         int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, split);
         if (verdict == 0) continue;
         if (verdict == 1) {
-            total += w.rgb * node_lobe(node);
+            total += node.z == 0 ? texel_part(node.xy, w.rgb, 1, 0) : w.rgb * node_lobe(node);
         } else if (node.z == 0) {
             stack[top++] = ivec3(node.xy, -1 - split);
         } else {

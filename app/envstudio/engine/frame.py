@@ -27,7 +27,9 @@ from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.timers import PassTimer
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.scene.camera import OrbitCamera
+from envstudio.scene.tangents import TangentField
 from envstudio.shading.gpu_scene import FrameInputs, GpuScene
+from envstudio.shading.tangent_buffers import TangentBuffers
 
 
 class ReflectorPass(Protocol):
@@ -65,6 +67,7 @@ class FrameRenderer:
         self._hdr: moderngl.Texture | None = None
         self._depth: moderngl.Renderbuffer | None = None
         self._fbo: moderngl.Framebuffer | None = None
+        self._tangents: TangentBuffers | None = None
 
     @property
     def hdr_texture(self) -> moderngl.Texture | None:
@@ -186,11 +189,33 @@ class FrameRenderer:
             frames.append(self.read_hdr())
         return frames[0], frames[1]
 
+    def reflector_tangents(
+        self, scene: GpuScene, camera: OrbitCamera, size: tuple[int, int], field: TangentField
+    ) -> npt.NDArray[np.float32]:
+        """The Banks material's unit tangent at every pixel centre, row 0 at the top: the
+        tangent ``field`` (scene/tangents.py) made orthogonal to :meth:`reflector_surface`'s
+        normal as the reference takes it (banks_brdf.glsl); (h, w, 3) float32, zero where no
+        reflector is the nearest surface. Uses the HDR target of ``size``."""
+        program = self.programs.get("frame/surface.glsl", {"TANGENTS": 1})
+        set_uniform(program, "u_camera_position", camera.position.astype(np.float32))
+        set_uniform(program, "u_output", 2)
+        if self._tangents is None:
+            self._tangents = TangentBuffers(self.ctx)
+        self._draw_reflectors_over_locals(
+            program,
+            scene,
+            camera,
+            size,
+            lambda gpu_node: self._tangents.render(program, gpu_node, field),
+        )
+        return self.read_hdr()
+
     def _draw_reflectors_over_locals(
-        self, program: moderngl.Program, scene: GpuScene, camera: OrbitCamera, size
+        self, program: moderngl.Program, scene: GpuScene, camera: OrbitCamera, size, draw=None
     ) -> None:
         """Clear the HDR target of ``size`` and draw the local objects (``u_value`` 0: they
-        hide what they cover) and then the reflectors (``u_value`` 1) with ``program``."""
+        hide what they cover) and then the reflectors (``u_value`` 1) with ``program``
+        (``draw(gpu_node)`` draws a reflector, when given)."""
         self._ensure_target(size)
         self._fbo.use()
         self._fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
@@ -204,7 +229,10 @@ class FrameRenderer:
             for gpu_node in nodes:
                 set_uniform(program, "u_model", gpu_node.model)
                 set_uniform(program, "u_normal_matrix", gpu_node.normal)
-                gpu_node.mesh.render(program)
+                if draw is not None and value:
+                    draw(gpu_node)
+                else:
+                    gpu_node.mesh.render(program)
 
     def _draw_background(self, scene: GpuScene, view, projection) -> None:
         program = self.programs.get("frame/background.glsl")
@@ -249,3 +277,6 @@ class FrameRenderer:
         self._release_target()
         self.timer.release()
         self._fullscreen.release()
+        if self._tangents is not None:
+            self._tangents.release()
+        self._tangents = None

@@ -11,8 +11,9 @@ the median relative luminance error over the reflector and PSNR of the display i
 point of the curve is the row ``compare --reference exact --param trace=false --param
 phong_exponent=N`` reports. One session renders every N.
 
-Methods of a reflectance model with no exact evaluation yet (exact_reference.EXACT_MODELS:
-Banks, GGX) are left out with a note: their Monte Carlo reference would take minutes a point.
+Methods of a model the Phong exponent does not set (banks: :data:`CURVE_MODELS`) and of a
+model with no exact evaluation (a plugin's own, exact_reference.EXACT_MODELS) are left out
+with a note.
 """
 
 from __future__ import annotations
@@ -27,6 +28,11 @@ from envstudio.errors import ParameterError, UserError
 from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.exact_reference import EXACT_MODELS
 from envstudio.measure.reference_runs import EXACT
+
+#: The reflectance models a Phong exponent sets (microfacet by GGX α = √(2 / (4N + 2))): the
+#: curve's axis; the other exact models (banks) have no point on it.
+CURVE_MODELS = ("phong", "microfacet")
+NO_EXPONENT = "has no Phong exponent (its lobe's width is its sharpness)"
 
 
 @dataclass
@@ -72,15 +78,18 @@ def curve_methods(names: Sequence[str]) -> tuple[list[str], list[str]]:
     Returns
     -------
     kept : list of str
-        The methods of a reflectance model in exact_reference.EXACT_MODELS, in order.
+        The methods of a reflectance model in :data:`CURVE_MODELS`, in order.
     notes : list of str
-        "banks: reflectance model banks has no exact reference yet", one per method left out.
+        "banks: reflectance model banks has no Phong exponent (its lobe's width is its
+        sharpness)", one per method left out.
     """
     kept, notes = [], []
     for name in names:
         model = method_class(name).reflectance
-        if model in EXACT_MODELS:
+        if model in CURVE_MODELS:
             kept.append(name)
+        elif model in EXACT_MODELS:
+            notes.append(f"{name}: reflectance model {model} {NO_EXPONENT}")
         else:
             notes.append(f"{name}: reflectance model {model} has no exact reference yet")
     return kept, notes
@@ -194,7 +203,7 @@ class CurveSteps:
         kept, notes = curve_methods(names)
         if not kept:
             raise ParameterError(
-                f"methods {list(names)!r}: none has an exact reference ({'; '.join(notes)})"
+                f"methods {list(names)!r}: none has an exact reference along N ({'; '.join(notes)})"
             )
         _check_view(session, size, ssaa)
         self.session = session

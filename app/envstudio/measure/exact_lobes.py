@@ -1,5 +1,5 @@
-"""The exact untraced glossy term of the models whose lobe depends on (n, v) or (v, t):
-``microfacet`` and ``banks`` (the reference's models 1 and 2).
+"""The exact untraced glossy term of the models whose lobe depends on (n, v) or (v, t)
+together: ``microfacet`` and ``banks`` (the reference's models 1 and 2).
 
 Their lobe is not a function of one direction, so no prefiltered map holds it; at each
 footprint sample the term is the integral of the environment against the lobe,
@@ -11,12 +11,15 @@ footprint sample the term is the integral of the environment against the lobe,
 over each lat-long texel, as the Monte Carlo reference sees it. A compute pass
 (shaders/reference/exact_lobe.glsl) evaluates it by seed 004 §5.1's descent of the
 environment's mip pyramid (prefilter.hierarchical.source_pyramid): a node is taken at its
-radiance centroid where the lobe is smooth over it (its cap, in half-vector space for GGX,
-is under :data:`ACCEPT` times the lobe's width at its distance), skipped where the lobe is
-zero over it, refined otherwise, and a texel still refined is cut into parts finer than the
-lobe. What that leaves out is measured, not assumed: :func:`checked_error` holds the
-result against a plain sum over Gauss points of every texel (:func:`brute_force_lobe`), the
-same anchor as the ``phong`` model's (measure/exact_reference.py).
+radiance moments where the lobe is smooth over it (a three-point rule exact for quadratics;
+for GGX its cap in half-vector space under :data:`ACCEPT` times max(α, its distance to n),
+for Banks under 3 :data:`ACCEPT` times the band's half width inside the band and 0.3
+:data:`ACCEPT` across its edges, where the lobe has a kink), skipped where the lobe is zero
+over it, refined otherwise, and a texel still refined is cut into parts finer than the
+lobe. What that leaves out is measured, not assumed: exact_reference.checked_error holds
+the result against a plain sum over Gauss points of every texel
+(exact_reference.brute_force_radiance, with :func:`microfacet_lobe` and :func:`banks_lobe`),
+the same anchor as the ``phong`` model's.
 """
 
 from __future__ import annotations
@@ -254,3 +257,28 @@ def microfacet_lobe(
     fresnel = f0 + (1.0 - f0) * m[:, None]
     value = (d * g2 / (4.0 * n_dot_v))[:, None] * fresnel
     return np.where((n_dot_l > 0.0)[:, None], value, 0.0)
+
+
+def banks_lobe(
+    model: LobeModel,
+    normals: np.ndarray,
+    views: np.ndarray,
+    tangents: np.ndarray,
+    directions: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Banks' lobe (seed 004 §5.3, banks_brdf.glsl) at (p, 3) directions for one sample.
+
+    Returns
+    -------
+    lobe : (p, 3) float64
+        f_banks(⟨l, t⟩, ⟨v, t⟩) [max(⟨n, l⟩, 0) with self-shadowing], the same per channel.
+    whole : (p,) float64
+        f_banks alone: what its integral over the sphere (the normalisation) sums.
+    """
+    lt = directions @ tangents
+    vt = float(views @ tangents)
+    s = model.sharpness
+    bracket = np.sqrt(np.maximum(1.0 - lt * lt, 0.0)) * math.sqrt(max(1.0 - vt * vt, 0.0))
+    whole = np.maximum(bracket - lt * vt - s, 0.0) / (1.0 - s) ** 2
+    lobe = whole * np.maximum(directions @ normals, 0.0) if model.self_shadowing else whole
+    return np.repeat(lobe[:, None], 3, axis=1), whole

@@ -23,10 +23,12 @@ What it leaves out is stated and checked: the spectral sums drop the lobe below
 into sub-texels finer than the lobe) at a fixed set of the samples and reports the median
 and largest relative difference.
 
-The ``microfacet`` model (GGX) shares the diffuse term; its glossy lobe depends on (n, v)
-together, so no prefiltered map holds it: measure/exact_lobes.py integrates it per sample
-on the GPU, and :func:`checked_error` holds it against the same kind of brute-force sum.
-Banks has no exact evaluation yet, and :data:`EXACT_MODELS` says so.
+The ``microfacet`` (GGX) and ``banks`` models share the diffuse term; their glossy lobes
+depend on (n, v) or (v, t) together, so no prefiltered map holds them: measure/exact_lobes.py
+integrates them per sample on the GPU (Banks at the tangents of
+engine FrameRenderer.reflector_tangents), and :func:`checked_error` holds them against the
+same kind of brute-force sum. A plugin's own model has no exact evaluation:
+:data:`EXACT_MODELS` lists those that have.
 """
 
 from __future__ import annotations
@@ -39,13 +41,15 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core import ggx, latlong
-from envstudio.measure.exact_lobes import LobeEvaluator, LobeModel, microfacet_lobe
+from envstudio.measure.exact_lobes import LobeEvaluator, LobeModel, banks_lobe, microfacet_lobe
 from envstudio.prefilter import spectral
 
 #: The reflectance models with an exact untraced evaluation here.
-EXACT_MODELS = ("phong", "microfacet")
+EXACT_MODELS = ("phong", "microfacet", "banks")
 #: The models whose glossy lobe the GPU integrates (exact_lobes.py).
-LOBE_MODELS = ("microfacet",)
+LOBE_MODELS = ("microfacet", "banks")
+#: The reference's values a Banks lobe reads (shading/materials.py).
+BANKS_VALUES = ("sharpness", "normalize", "self_shadowing", "tangent_field", "tangent_axis")
 #: Rows of the spectral grid at least (N = 1's kink at the horizon wants a finer grid than
 #: its width asks for; from 128 the diffuse sum is within 1e-4 (studio) and 3.3e-4 (sunrise)
 #: of the brute force at every direction tried, as at 256).
@@ -146,6 +150,14 @@ def diffuse_radiance(
 def lobe_model(values: dict[str, object]) -> LobeModel:
     """The glossy model of the reference's ``values`` (a model in :data:`LOBE_MODELS`)."""
     fresnel = tuple(float(c) for c in np.broadcast_to(values["fresnel"], 3))
+    if values["model"] == "banks":
+        return LobeModel(
+            "banks",
+            fresnel,
+            sharpness=float(values["sharpness"]),
+            normalize=bool(values["normalize"]),
+            self_shadowing=bool(values["self_shadowing"]),
+        )
     alpha = ggx.alpha_for_exponent(float(values["phong_exponent"]))
     return LobeModel(str(values["model"]), fresnel, alpha=alpha)
 
@@ -156,6 +168,7 @@ def exact_radiance(
     views: npt.ArrayLike,
     values: dict[str, object],
     lobes: LobeEvaluator | None = None,
+    tangents: npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.float32]:
     """Exitant radiance of the reference's untraced model at each sample, exactly.
 
@@ -170,6 +183,9 @@ def exact_radiance(
         ``fresnel``, ``kd``, ``phong_exponent``.
     lobes : LobeEvaluator or None
         The GPU integration of a model in :data:`LOBE_MODELS` (needed for those).
+    tangents : (s, 3) array_like or None
+        model=banks: unit tangents orthogonal to the normals (engine
+        FrameRenderer.reflector_tangents).
 
     Returns
     -------
@@ -186,7 +202,8 @@ def exact_radiance(
     facing, _, diffuse, _ = eq8_terms(normals, views, fresnel, kd)
     out = diffuse_radiance(radiance, normals, diffuse)
     n, v = np.asarray(normals)[facing], np.asarray(views)[facing]
-    out[facing] += lobes.glossy(radiance, lobe_model(values), n, v)
+    t = None if tangents is None else np.asarray(tangents)[facing]
+    out[facing] += lobes.glossy(radiance, lobe_model(values), n, v, t)
     return out.astype(np.float32)
 
 
@@ -247,13 +264,15 @@ def brute_force_radiance(
     normals: npt.ArrayLike,
     views: npt.ArrayLike,
     values: dict[str, object],
+    tangents: npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.float64]:
     """:func:`exact_radiance` by a plain sum over quadrature points of every texel
-    (:func:`gauss_texels`, :func:`texel_split`): slow, for checks. Same parameters;
-    (s, 3) float64."""
+    (:func:`gauss_texels`, :func:`brute_force_split`): slow, for checks. Same parameters;
+    (s, 3) float64. Banks' normalisation is the same sum of its lobe (not the closed form
+    the GPU pass takes)."""
     n = np.asarray(normals, dtype=np.float64)
     v = np.asarray(views, dtype=np.float64)
-    exponent = float(values["phong_exponent"])
+    exponent = float(values.get("phong_exponent", 1.0))
     fresnel = np.asarray(values["fresnel"], dtype=np.float64)
     _, reflections, diffuse, glossy = eq8_terms(n, v, fresnel, values["kd"])
     image = np.asarray(radiance, dtype=np.float32)
@@ -272,21 +291,32 @@ def brute_force_radiance(
     texel = np.repeat(np.repeat(image, 3 * split, axis=0), 3 * split, axis=1)
     weighted = texel.reshape(-1, 3).astype(np.float64) * weights[:, None]
     for k in np.nonzero(np.einsum("sk,sk->s", n, v) > 0.0)[0]:
+        total, norm = np.zeros(3), 0.0
         for start in range(0, len(directions), _POINTS_PER_BLOCK):
             block = slice(start, start + _POINTS_PER_BLOCK)
-            lobe = microfacet_lobe(model, n[k], v[k], directions[block])
-            out[k] += (lobe * weighted[block]).sum(axis=0)
+            if model.name == "banks":
+                lobe, whole = banks_lobe(model, n[k], v[k], tangents[k], directions[block])
+                norm += whole @ weights[block]
+            else:
+                lobe = microfacet_lobe(model, n[k], v[k], directions[block])
+            total += (lobe * weighted[block]).sum(axis=0)
+        if model.name == "banks":
+            total *= glossy[k] / (norm if model.normalize else 1.0)
+        out[k] += total
     return out
 
 
 def brute_force_split(height: int, values: dict[str, object]) -> int:
     """Sub-texels per texel edge of :func:`brute_force_radiance`'s glossy sum for the
     reference's ``values``: :func:`texel_split` for Phong, each at most half of GGX's α."""
-    exponent = float(values["phong_exponent"])
-    if str(values.get("model", "phong")) == "phong":
-        return texel_split(height, exponent)
-    alpha = ggx.alpha_for_exponent(exponent)
-    return int(min(16, max(1, math.ceil(2.0 * (math.pi / height) / alpha))))
+    model = str(values.get("model", "phong"))
+    if model == "phong":
+        return texel_split(height, float(values["phong_exponent"]))
+    if model == "banks":  # a quarter of the band's half width acos(s): its edges are kinks
+        width = 0.25 * math.acos(float(values["sharpness"]))
+    else:
+        width = ggx.alpha_for_exponent(float(values["phong_exponent"]))
+    return int(min(16, max(1, math.ceil(2.0 * (math.pi / height) / width))))
 
 
 def _phong_lobe(exponent: float):
@@ -328,6 +358,7 @@ def checked_error(
     computed: npt.ArrayLike,
     values: dict[str, object],
     samples: int = CHECKED_SAMPLES,
+    tangents: npt.ArrayLike | None = None,
 ) -> CheckedError:
     """The relative differences of the ``computed`` (s, 3) radiance from the brute force
     (:func:`brute_force_radiance` of the reference's ``values``) at up to ``samples``
@@ -347,7 +378,8 @@ def checked_error(
     points = 9.0 * image.shape[0] * image.shape[1] * split**2
     samples = int(min(samples, max(8, _CHECK_BUDGET // points), len(facing)))
     picked = facing[np.linspace(0, len(facing) - 1, samples).astype(int)]
-    exact = brute_force_radiance(radiance, n[picked], v[picked], values)
+    t = None if tangents is None else np.asarray(tangents, dtype=np.float64)[picked]
+    exact = brute_force_radiance(radiance, n[picked], v[picked], values, t)
     computed = np.asarray(computed, dtype=np.float64)[picked]
     scale = np.maximum(exact.max(axis=1), 1e-30)
     differences = np.abs(computed - exact).max(axis=1) / scale
@@ -384,6 +416,7 @@ def exact_frame(
     ssaa: int,
     started: float | None = None,
     lobes: LobeEvaluator | None = None,
+    tangents: npt.NDArray[np.float32] | None = None,
 ) -> ExactFrame:
     """The exact untraced frame from the reflectors' surface at ``ssaa``² samples a pixel.
 
@@ -401,12 +434,15 @@ def exact_frame(
         ``time.perf_counter()`` when the surface pass began (None: now).
     lobes : LobeEvaluator or None
         For a model in :data:`LOBE_MODELS`: its GPU integration.
+    tangents : (h·ssaa, w·ssaa, 3) float32 or None
+        model=banks: engine FrameRenderer.reflector_tangents at the fine size.
     """
     started = time.perf_counter() if started is None else started
     covered = np.linalg.norm(normals, axis=-1) > 0.5
     n, v = normals[covered], views[covered]
-    shaded = exact_radiance(radiance, n, v, values, lobes)
-    error = checked_error(radiance, n, v, shaded, values)
+    t = None if tangents is None else tangents[covered]
+    shaded = exact_radiance(radiance, n, v, values, lobes, t)
+    error = checked_error(radiance, n, v, shaded, values, tangents=t)
     fine = np.zeros(normals.shape, dtype=np.float32)
     fine[covered] = shaded
     h, w = normals.shape[0] // ssaa, normals.shape[1] // ssaa

@@ -41,6 +41,7 @@ from envstudio.measure.compare import footprint_filter
 from envstudio.measure.exact_lobes import LobeEvaluator
 from envstudio.measure.exact_reference import LOBE_MODELS, exact_radiance
 from envstudio.measure.stopping import median_error
+from envstudio.scene.tangents import TangentField
 
 SSAA = 2
 """Footprint samples per pixel per axis of the tiles' reference and their methods."""
@@ -87,6 +88,7 @@ class _Frame:
     normals: npt.NDArray[np.float32] | None = None
     views: npt.NDArray[np.float32] | None = None
     covered: npt.NDArray[np.bool_] | None = None
+    tangents: npt.NDArray[np.float32] | None = None
     shaded: list[npt.NDArray[np.float32]] = field(default_factory=list)
     hdr: npt.NDArray[np.float32] | None = None
     mask: npt.NDArray[np.bool_] | None = None
@@ -168,6 +170,13 @@ class ExactTiles:
                 session.gpu_scene, session.camera, fine
             )
             frame.covered = np.linalg.norm(frame.normals, axis=-1) > 0.5
+            values = frame.values
+            if values["model"] == "banks":
+                field = TangentField(str(values["tangent_field"]), str(values["tangent_axis"]))
+                tangents = renderer.reflector_tangents(
+                    session.gpu_scene, session.camera, fine, field
+                )
+                frame.tangents = tangents[frame.covered]
             return
         normals, views = frame.normals[frame.covered], frame.views[frame.covered]
         done = sum(len(chunk) for chunk in frame.shaded)
@@ -175,8 +184,11 @@ class ExactTiles:
             size = LOBE_CHUNK if frame.values.get("model") in LOBE_MODELS else CHUNK
             chunk = slice(done, done + size)
             radiance = session.scene.environment.radiance
+            tangents = None if frame.tangents is None else frame.tangents[chunk]
             frame.shaded.append(
-                exact_radiance(radiance, normals[chunk], views[chunk], frame.values, self._lobes)
+                exact_radiance(
+                    radiance, normals[chunk], views[chunk], frame.values, self._lobes, tangents
+                )
             )
             return
         samples = np.zeros(frame.normals.shape, dtype=np.float32)

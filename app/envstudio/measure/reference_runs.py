@@ -40,6 +40,7 @@ from envstudio.measure.stopping import (
     ReferenceJudge,
     duration,
 )
+from envstudio.scene.tangents import TangentField
 
 STOPPED_BY = {
     "reliable": "every method reliable",
@@ -316,16 +317,24 @@ def exact_run(
     started = time.perf_counter()
     fine = (size[0] * ssaa, size[1] * ssaa)
     normals, views = session.renderer.reflector_surface(session.gpu_scene, session.camera, fine)
+    values = reference.values.as_dict()
+    tangents = None
+    if values["model"] == "banks":
+        field = TangentField(str(values["tangent_field"]), str(values["tangent_axis"]))
+        tangents = session.renderer.reflector_tangents(
+            session.gpu_scene, session.camera, fine, field
+        )
     lobes = LobeEvaluator(session.ctx, session.programs)
     try:
         frame = exact_frame(
             normals,
             views,
             session.scene.environment.radiance,
-            reference.values.as_dict(),
+            values,
             ssaa,
             started,
             lobes,
+            tangents,
         )
     finally:
         lobes.release()

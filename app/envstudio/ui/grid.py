@@ -62,7 +62,7 @@ from envstudio.engine.registry import method_class
 from envstudio.errors import UserError
 from envstudio.gpu.programs import ShaderCompileError
 from envstudio.measure.cached_reference import CachedReference, CachedReferences, describe
-from envstudio.measure.exact_reference import EXACT_MODELS
+from envstudio.measure.exact_reference import BANKS_VALUES, EXACT_MODELS
 from envstudio.measure.exact_tiles import ExactTiles, TileRequest
 
 FRACTIONS = (1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 6, 1 / 8)
@@ -442,15 +442,13 @@ class GridMetrics:
         gives the reference of its model (CachedReferences.candidates' first), with the
         hub's N where the tile's matched N is its round trip (N → b → N)."""
         values = self._cached.candidates(hub, method, hub, cube)[0]
+        exact = {"model": method.reflectance, "fresnel": values["fresnel"], "kd": values["kd"]}
+        if method.reflectance == "banks":  # its lobe's own values, and no exponent
+            return exact | {name: values[name] for name in BANKS_VALUES}
         exponent, hub_exponent = float(values["phong_exponent"]), hub.values["phong_exponent"]
         if math.isclose(exponent, hub_exponent, rel_tol=ROUND_TRIP):
             exponent = float(hub_exponent)
-        return {
-            "model": method.reflectance,
-            "fresnel": values["fresnel"],
-            "kd": values["kd"],
-            "phong_exponent": exponent,
-        }
+        return exact | {"phong_exponent": exponent}
 
     def _measure_exact(self, state: GridState, session: Session) -> None:
         measured = self._exact.step(session, session.renderer.display.as_dict())
