@@ -12,9 +12,10 @@ over each lat-long texel, as the Monte Carlo reference sees it. A compute pass
 (shaders/reference/exact_lobe.glsl) evaluates it by seed 004 §5.1's descent of the
 environment's mip pyramid (prefilter.hierarchical.source_pyramid): a node is taken at its
 radiance moments where the lobe is smooth over it (a three-point rule exact for quadratics;
-for GGX its cap in half-vector space under :data:`ACCEPT` times max(α, its distance to n),
-for Banks under 3 :data:`ACCEPT` times the band's half width inside the band and 0.3
-:data:`ACCEPT` across its edges, where the lobe has a kink), skipped where the lobe is zero
+for GGX its cap in half-vector space under :data:`ACCEPT` times max(α, twice its distance
+to n: the tail, a power of that distance, takes nodes twice as wide as the peak would),
+for Banks under 1.5 :data:`ACCEPT` times the band's half width inside the band and
+:data:`ACCEPT` times it across its edges, where the lobe has a kink), skipped where the lobe is zero
 over it, refined otherwise, and a texel still refined is cut into parts finer than the
 lobe. What that leaves out is measured, not assumed: exact_reference.checked_error holds
 the result against a plain sum over Gauss points of every texel
