@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core import ggx
+from envstudio.errors import ParameterError
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
 from envstudio.prefilter.hierarchical import source_pyramid
@@ -46,6 +47,29 @@ BUDGET = 60000
 SAMPLES_PER_DISPATCH = 1 << 14
 #: Nodes of the level the descent starts at, at least.
 START_NODES = 32
+#: Texels of the largest environment the pyramid takes (2048 × 1024: about 110 MB of textures
+#: and 0.9 GB while it is built).
+MAX_TEXELS = 2048 * 1024
+
+
+def check_size(height: int, width: int) -> None:
+    """Refuse a map too large for the pyramid, naming the ``--max-env-width`` that fits.
+
+    Raises
+    ------
+    ParameterError
+        Above :data:`MAX_TEXELS`.
+    """
+    if height * width > MAX_TEXELS:
+        fits = width
+        while height * fits * fits // width > MAX_TEXELS:
+            fits //= 2
+        raise ParameterError(
+            f"environment {width}x{height}: too large for the exact reference's tables (at "
+            f"most {MAX_TEXELS} texels); pass --max-env-width {fits} (or --reference montecarlo)"
+        )
+
+
 _MODELS = {"microfacet": 1, "banks": 2}
 #: The pyramid's textures in PyramidTextures.textures, by their names in exact_lobe.glsl.
 TEXTURE_NAMES = ("u_radiance", "u_direction", "u_centroid", "u_spread", "u_spread_rest")
@@ -85,9 +109,15 @@ class PyramidTextures:
     ctx : moderngl.Context
     radiance : (h, w, 3) array_like
         The lat-long environment, linear radiance; h and w powers of two (w = 2h).
+
+    Raises
+    ------
+    ParameterError
+        A map above :data:`MAX_TEXELS` (:func:`check_size`).
     """
 
     def __init__(self, ctx: moderngl.Context, radiance: npt.ArrayLike):
+        check_size(*np.shape(radiance)[:2])
         pyramid = source_pyramid(radiance)
         h, w = pyramid.shapes[0]
         self.size = (w, h)

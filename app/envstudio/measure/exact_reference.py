@@ -41,7 +41,13 @@ import numpy as np
 import numpy.typing as npt
 
 from envstudio.core import ggx, latlong
-from envstudio.measure.exact_lobes import LobeEvaluator, LobeModel, banks_lobe, microfacet_lobe
+from envstudio.measure.exact_lobes import (
+    LobeEvaluator,
+    LobeModel,
+    banks_lobe,
+    check_size,
+    microfacet_lobe,
+)
 from envstudio.prefilter import spectral
 
 #: The reflectance models with an exact untraced evaluation here.
@@ -191,7 +197,14 @@ def exact_radiance(
     -------
     (s, 3) float32
         Linear radiance.
+
+    Raises
+    ------
+    ParameterError
+        A map too large for the tables, naming the ``--max-env-width`` that fits
+        (exact_lobes.check_size).
     """
+    check_size(*np.shape(radiance)[:2])
     model = str(values.get("model", "phong"))
     fresnel = np.asarray(values["fresnel"], dtype=np.float64)
     kd = np.asarray(values["kd"], dtype=np.float64)
