@@ -356,8 +356,9 @@ def error_curve(
     dict
         ``{"exponents": [...], "methods": {name: {"median_relative_error": [...],
         "psnr_db": [...]}}}``, one value per exponent (NaN where a method refuses its values
-        at that N), and ``"notes"``: the methods left out (a reflectance model with no
-        exact reference yet, such as banks) and the points missing, one line each.
+        at that N), and ``"notes"``: the methods left out (banks, whose lobe no Phong
+        exponent sets, and a plugin's model with no exact reference) and the points
+        missing, one line each.
 
     Raises
     ------

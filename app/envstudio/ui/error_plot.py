@@ -36,6 +36,10 @@ from envstudio.measure.error_curve import CurveSteps, ErrorCurve
 
 EXPONENTS = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0)
 """The Phong exponents N measured, as es.error_curve's default."""
+#: The models the window's curve measures: Phong's exact reference takes a fraction of a
+#: second a point; the microfacet one's GPU descent takes seconds on a software renderer, too
+#: long between two frames (es.error_curve measures it).
+WINDOW_MODELS = ("phong",)
 SIZE = (64, 64)
 #: Both axes reach this factor past the first and last values (their markers whole).
 MARGIN = 1.3
@@ -160,7 +164,9 @@ class GlossinessCurve:
         own = RenderSession(session.scene, ctx=session.ctx, cube_size=session.gpu_scene.cube_size)
         own.camera = copy.deepcopy(session.camera)
         try:
-            self._steps = CurveSteps(own, self._wanted, self.exponents, self.size, self.ssaa)
+            self._steps = CurveSteps(
+                own, self._wanted, self.exponents, self.size, self.ssaa, models=WINDOW_MODELS
+            )
         except BaseException:
             own.release()
             raise
