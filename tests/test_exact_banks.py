@@ -103,6 +103,6 @@ def test_a_map_too_large_for_the_tables_names_the_width_that_fits(monkeypatch):
     monkeypatch.setattr(exact_lobes, "MAX_TEXELS", 16 * 32)
     normals, views = random_frames(4, seed=1)
     values = {"model": "phong", "fresnel": FRESNEL, "kd": KD, "phong_exponent": 10.0}
-    with pytest.raises(ParameterError, match="environment 64x32: .* --max-env-width 32 "):
+    with pytest.raises(ParameterError, match=r"environment 64x32: .* --max-env-width 32 "):
         exact_radiance(spot_map(32), normals, views, values)
     assert math.isfinite(float(exact_radiance(spot_map(16), normals, views, values).sum()))
