@@ -54,7 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--reference",
         choices=("exact", "montecarlo"),
         default="exact",
-        help="exact (default): a reflectance model with an exact untraced evaluation (phong) "
+        help="exact (default): a reflectance model with an exact untraced evaluation (phong, "
+        "microfacet, banks) "
         "is evaluated exactly at the methods' samples wherever the untraced model is wanted "
         "(the reference itself with trace=false, the approximation column with trace=true); "
         "other models, and the traced reference, by Monte Carlo; montecarlo: Monte Carlo "

@@ -345,7 +345,7 @@ def exact_run(
     checked = frame.error
     print(
         f"reference: exact in {frame.seconds:.2f} s; against the brute force at "
-        f"{checked.samples} samples: median {100 * checked.median:.2g} %, largest "
+        f"{checked.describe()}: median {100 * checked.median:.2g} %, largest "
         f"{100 * checked.largest:.2g} %",
         file=sys.stderr,
     )

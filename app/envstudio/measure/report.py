@@ -454,7 +454,7 @@ def _run_line(ref: ReferenceRun) -> str:
         checked = ref.exact_error
         return (
             f"exact: the untraced model's integrals at the methods' samples in "
-            f"{ref.total_s:.2f} s; against the brute force at {checked.samples} of them: "
+            f"{ref.total_s:.2f} s; against the brute force at {checked.describe()}: "
             f"median {_percent(checked.median)}, largest {_percent(checked.largest)}"
         )
     change = ref.status.rms_change
