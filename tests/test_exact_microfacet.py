@@ -76,6 +76,12 @@ def frames_for(name: str) -> tuple[np.ndarray, np.ndarray]:
 #: 2.2 % per sample, 0.14 % on the mean at most).
 MISSES_THE_GOAL = {("sun", 0.5), ("sun", 0.2), ("sun", 0.08), ("smooth", 0.5)}
 TODAY = (4e-2, 3e-3)
+GRAZING_ISSUE = (
+    "exact_lobe.glsl cuts a texel into at most MAX_SPLIT = 16 parts a side: at a "
+    "grazing view the reflected lobe (about 2α ⟨v, h⟩ across the plane of incidence) is "
+    "narrower than a part (measured: 17 % off here, 47 % at ⟨n, v⟩ = 0.05; 12 % on a "
+    "512 × 1024 map at ⟨n, v⟩ = 0.05, where GGX_TAIL's wider nodes add to it)"
+)
 HORIZON_ISSUE = (
     "exact_lobe.glsl misses the issue's goal (1 % per sample, 0.1 % on the mean) where the "
     "horizon <n, l> = 0 crosses the lobe: classify() (microfacet) accepts a node straddling it, "
@@ -137,13 +143,6 @@ def test_a_constant_environment_gives_the_constant_times_the_albedo(gl_ctx, prog
         lobes.release()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="exact_lobe.glsl cuts a texel into at most MAX_SPLIT = 16 parts a side: at a "
-    "grazing view the reflected lobe (about 2α ⟨v, h⟩ across the plane of incidence) is "
-    "narrower than a part (measured: 17 % off here, 47 % at ⟨n, v⟩ = 0.05; 12 % on a "
-    "512 × 1024 map at ⟨n, v⟩ = 0.05, where GGX_TAIL's wider nodes add to it)",
-)
 def test_a_grazing_view_of_a_lobe_far_narrower_than_a_texel(gl_ctx, programs):
     """N = 5000 (α = 0.01) on a 32-row map, ⟨n, v⟩ = 0.1: every sample within 1 %."""
     rng = np.random.default_rng(2)
@@ -159,7 +158,11 @@ def test_a_grazing_view_of_a_lobe_far_narrower_than_a_texel(gl_ctx, programs):
     finally:
         lobes.release()
     error = relative(exact, ggx_albedo(normals, views, 0.01, FRESNEL))
-    assert error.max() < 1e-2, error.max()
+    # a known miss of the goal (GRAZING_ISSUE), held to what it is today: a result broken
+    # further fails here instead of hiding in the expected failure
+    assert error.max() < 0.25, error.max()
+    if error.max() >= 1e-2:
+        pytest.xfail(f"{GRAZING_ISSUE}: {error.max():.2%}")
 
 
 @pytest.fixture
