@@ -101,6 +101,10 @@ class ReferenceRun:
         A traced run estimated as the exact untraced reference plus the sampled difference
         traced − untraced (:func:`control_variate`): ``hdr`` and the noise are that
         estimate's.
+    pixel_noise : (h, w) float32 or None
+        A control-variate run's relative standard error per pixel (0 where nothing is
+        traced): what its methods' reliability is judged by
+        (stopping.median_error_spread); None otherwise.
     """
 
     parameters: dict[str, object]
@@ -116,6 +120,7 @@ class ReferenceRun:
     wall_s: float = 0.0
     exact_error: CheckedError | None = None
     control_variate: bool = False
+    pixel_noise: npt.NDArray[np.float32] | None = None
 
     @property
     def converged(self) -> bool:
@@ -127,6 +132,12 @@ class ReferenceRun:
         """Why marked metrics cannot be trusted, or None when the reference converged."""
         if self.converged:
             return None
+        if self.pixel_noise is not None:
+            return (
+                f"{self._stop_text()} and the control variate's noise where it traces (median "
+                f"{100 * self.relative_standard_error:.3g} %) can move the marked methods' "
+                f"median relative error by {NOISE_SHARE:g} of it or more ({self._advice()})"
+            )
         if self.exact_error is not None:
             checked = self.exact_error
             return (
@@ -214,7 +225,8 @@ def converge(
                 if control is None:
                     judge.judge(reference, session.read_hdr(), mask)
                 else:
-                    judge.judge(reference, *control_variate(session, reference, control, mask))
+                    hdr, _, noise, pixel_noise = control_variate(session, reference, control, mask)
+                    judge.judge(reference, hdr, mask, noise, pixel_noise)
             if progress:
                 bar.set_postfix_str(progress_line(reference, judge), refresh=False)
                 bar.update()
@@ -231,10 +243,11 @@ def converge(
     if resumed:
         print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
     stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
+    pixel_noise = None
     if control is None:
         hdr, noise = session.read_hdr(), reference.relative_standard_error()
     else:
-        hdr, _, noise = control_variate(session, reference, control, mask)
+        hdr, _, noise, pixel_noise = control_variate(session, reference, control, mask)
     print(f"reference: {stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
     run = ReferenceRun(
         parameters=reference.values.as_dict(),
@@ -249,6 +262,7 @@ def converge(
         stopped_by=stopped_by,
         wall_s=wall_s,
         control_variate=control is not None,
+        pixel_noise=pixel_noise,
     )
     return run, mask
 
@@ -258,7 +272,7 @@ def control_variate(
     reference: GroundTruth,
     control: tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_]],
     mask: npt.NDArray[np.bool_],
-) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_], float]:
+) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.bool_], float, npt.NDArray[np.float32]]:
     """The traced reference with the untraced estimate of the same samples as its control
     variate (ground_truth.PairedEstimates.controlled): T − β (U − exact untraced).
 
@@ -279,6 +293,10 @@ def control_variate(
         Median of the estimate's luminance standard error over its luminance (channel errors
         added: an upper bound, as the reference's) over the pixels of ``mask`` where the
         traced and untraced estimates differ (where something is traced); 0 where none do.
+    pixel_noise : (h, w) float32
+        That ratio at every pixel: 0 where nothing is traced, inf where traced and black
+        or where the exact run does not cover the pixel (stopping.median_error_spread
+        judges the methods by it).
     """
     exact, covered = control[0], control[1][..., None]
     paired = reference.paired()
@@ -289,14 +307,17 @@ def control_variate(
     # over them would hide the rest)
     spread_y = np.nan_to_num(paired.difference_error, posinf=np.inf) @ LUMINANCE
     traced = mask & (spread_y > TRACED_SHARE * np.abs(hdr @ LUMINANCE))
-    judged = traced if traced.any() else mask
-    luminance = hdr[judged] @ LUMINANCE
-    spread = np.where(covered, error, np.inf)[judged] @ LUMINANCE
-    lit = luminance > 0
+    luminance = hdr @ LUMINANCE
+    spread = np.where(covered, error, np.inf) @ LUMINANCE
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = np.where(luminance > 0, spread / luminance, np.inf)
+    # a pixel only the traced footprint reaches holds a plain traced estimate: unknown
+    pixel_noise = np.where(traced | ~control[1], relative, 0.0).astype(np.float32)
     if not traced.any():
-        return hdr, mask, 0.0
-    noise = float(np.median(spread[lit] / luminance[lit])) if lit.any() else float("inf")
-    return hdr, mask, noise
+        return hdr, mask, 0.0, pixel_noise
+    lit = traced & (luminance > 0)
+    noise = float(np.median(relative[lit])) if lit.any() else float("inf")
+    return hdr, mask, noise, pixel_noise
 
 
 def exact_run(

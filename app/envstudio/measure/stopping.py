@@ -19,6 +19,14 @@ Two rules:
     falls below ``tolerance``. Used with ``--strict``, when ``tolerance`` is
     given explicitly, and when only the reference itself is compared.
 
+With a control-variate reference (measure/reference_runs.control_variate) the noise is
+zero wherever nothing is traced, so one median over the reflector would hide the pixels
+still sampled and one over those alone would ask more than the metric needs: each method's
+uncertainty is then :func:`median_error_spread`, how far its median error can move when
+every pixel of the reference moves by its own standard error, and the rule holds when that
+is under :data:`NOISE_SHARE` of its error. On a convex reflector without local objects it is
+zero at once: nothing is left to sample.
+
 Under either rule the reference also stops on its sample budget
 (``max_samples``) or its time limit (``time_limit``). Noise falls as
 1/sqrt(samples), so the samples still needed are projected from the current
@@ -63,6 +71,9 @@ class Judgement:
         Median relative standard error of the reference over the reflector.
     errors : dict
         Method name → median relative luminance error against the reference.
+    spreads : dict or None
+        Method name → :func:`median_error_spread` of its error, where the reference's noise
+        is known per pixel (a control variate's); None: ``noise`` stands for every method.
     """
 
     batches: int
@@ -70,10 +81,28 @@ class Judgement:
     seconds: float
     noise: float
     errors: dict[str, float]
+    spreads: dict[str, float] | None = None
+
+    def uncertainty(self, name: str) -> float:
+        """How much of method ``name``'s error may be the reference's noise."""
+        return self.noise if self.spreads is None else self.spreads[name]
 
     def reliable(self, name: str) -> bool:
         """Whether method ``name``'s numbers can be trusted by the noise rule."""
-        return self.noise < NOISE_SHARE * self.errors[name]
+        return self.uncertainty(name) < NOISE_SHARE * self.errors[name]
+
+    @property
+    def shortfall(self) -> float:
+        """The largest ratio of a method's uncertainty to :data:`NOISE_SHARE` of its error
+        (below 1: every method reliable)."""
+        return (
+            max(
+                (self.uncertainty(n) / (NOISE_SHARE * e) if e > 0 else math.inf)
+                for n, e in self.errors.items()
+            )
+            if self.errors
+            else 0.0
+        )
 
     @property
     def all_reliable(self) -> bool:
@@ -118,6 +147,42 @@ def median_error(
     return float(np.median(relative_error(hdr, reference_hdr)[mask]))
 
 
+def median_error_spread(
+    hdr: npt.NDArray[np.float32],
+    reference_hdr: npt.NDArray[np.float32],
+    pixel_noise: npt.NDArray,
+    mask: npt.NDArray,
+) -> float:
+    """Half the range of :func:`median_error` when each reference pixel moves by its noise.
+
+    A pixel's relative error e moves by at most σ (1 + e) to first order when its reference
+    value moves by σ of itself; the median over ``mask`` then lies between the medians of
+    e − σ (1 + e) and of e + σ (1 + e). Where only a few pixels are noisy the median barely
+    moves, wherever they are; where all are, the spread is about their median noise (the
+    rule without a per-pixel noise).
+
+    Parameters
+    ----------
+    hdr, reference_hdr : (h, w, 3) float32
+        The method's frame and the reference, linear.
+    pixel_noise : (h, w) float
+        The reference's relative standard error per pixel (0 where it is exact, inf where
+        unknown).
+    mask : (h, w) bool
+        The pixels compared.
+
+    Returns
+    -------
+    float
+        Unitless, ≥ 0.
+    """
+    error = relative_error(hdr, reference_hdr)[mask].astype(np.float64)
+    moved = np.asarray(pixel_noise, dtype=np.float64)[mask] * (1.0 + error)
+    high = np.median(error + moved)
+    low = np.median(np.maximum(error - moved, 0.0))
+    return float(0.5 * (high - low))
+
+
 class ReferenceJudge:
     """Judges the methods' errors against the reference as it accumulates.
 
@@ -159,11 +224,19 @@ class ReferenceJudge:
         reference_hdr: npt.NDArray[np.float32],
         mask: npt.NDArray[np.bool_],
         noise: float | None = None,
+        pixel_noise: npt.NDArray | None = None,
     ) -> Judgement:
         """Measure the noise and every method's error against ``reference_hdr`` over ``mask``;
         ``noise``, when given, is the noise of ``reference_hdr`` (a control-variate estimate's),
-        else the reference's own."""
+        else the reference's own; ``pixel_noise`` (h, w), when given, its relative standard
+        error per pixel, which each method's :func:`median_error_spread` is judged by."""
         status = reference.status
+        spreads = None
+        if pixel_noise is not None:
+            spreads = {
+                name: median_error_spread(hdr, reference_hdr, pixel_noise, mask)
+                for name, hdr in self.frames.items()
+            }
         judgement = Judgement(
             batches=status.batches,
             samples=status.samples,
@@ -172,6 +245,7 @@ class ReferenceJudge:
             errors={
                 name: median_error(hdr, reference_hdr, mask) for name, hdr in self.frames.items()
             },
+            spreads=spreads,
         )
         self.record(judgement)
         return judgement
@@ -194,16 +268,16 @@ class ReferenceJudge:
         )
 
     def seconds_left(self) -> float | None:
-        """Projected seconds until the noise reaches :attr:`Judgement.target`.
+        """Projected seconds until every method is reliable.
 
-        Noise ∝ 1/sqrt(samples): the samples needed are samples × (noise /
-        target)²; the rate is this run's samples per second between the first
-        judgement and the last. None without a rate or a finite target.
+        Noise ∝ 1/sqrt(samples): the samples needed are samples ×
+        :attr:`Judgement.shortfall`²; the rate is this run's samples per second between
+        the first judgement and the last. None without a rate or a finite shortfall.
         """
         first, last = self._first, self.last
-        if last is None or not (math.isfinite(last.noise) and 0 < last.target < math.inf):
+        if last is None or not math.isfinite(last.shortfall):
             return None
-        needed = last.samples * (last.noise / last.target) ** 2
+        needed = last.samples * last.shortfall**2
         if needed <= last.samples:
             return 0.0
         spent = last.seconds - first.seconds
@@ -218,11 +292,19 @@ class ReferenceJudge:
         if last is None:
             return ""
         noise = f"{100 * last.noise:.3g} %" if math.isfinite(last.noise) else "—"
-        errors = ", ".join(
-            f"{name} {100 * error:.3g} %{' ✓' if last.reliable(name) else ''}"
-            for name, error in last.errors.items()
-        )
-        line = f"noise {noise} (needs < {100 * last.target:.3g} %); errors: {errors}"
+        if last.spreads is None:
+            errors = ", ".join(
+                f"{name} {100 * error:.3g} %{' ✓' if last.reliable(name) else ''}"
+                for name, error in last.errors.items()
+            )
+            line = f"noise {noise} (needs < {100 * last.target:.3g} %); errors: {errors}"
+        else:
+            errors = ", ".join(
+                f"{name} {100 * error:.3g} ± {100 * last.spreads[name]:.2g} %"
+                f"{' ✓' if last.reliable(name) else ''}"
+                for name, error in last.errors.items()
+            )
+            line = f"noise {noise} where traced; errors: {errors}"
         left = self.seconds_left()
         if self.rule == NOISE_RULE and left is not None:
             since = time.perf_counter() - self._judged_at
