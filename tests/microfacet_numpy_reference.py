@@ -6,14 +6,16 @@ shaders/common/sampling.glsl and shaders/reference/material.glsl alone:
 
     ∫ L(l) D(h) G2(l, v) F(v·h) / (4 ⟨n, v⟩) dl over ⟨n, l⟩ > 0,
 
-D the GGX distribution, G2 the height-correlated Smith masking-shadowing, F Schlick's per
-channel at ⟨v, h⟩, h = (l + v)/|l + v|, the map a function constant over each lat-long
-texel. :func:`ggx_sum` integrates it texel by texel, each texel cut into s × s parts of
-3 × 3 Gauss–Legendre points in (θ, φ), s chosen per sample and texel from the lobe's own
-scale where the texel lies (in half-vector space, where the lobe is round: its width α at
-the peak, its distance from n in the tails; a texel's extent there is its own over
-2 ⟨v, h⟩, which grows as the view grazes); :func:`ggx_albedo` integrates the lobe under a
-constant map in half-vector space, (θ_h, φ_h) about n, with dl = 4 ⟨v, h⟩ dh.
+D the GGX distribution, G2 the height-correlated Smith masking-shadowing (with
+``smith="separable"`` Mitsuba 3's uncorrelated G1(v) G1(l) instead, the like-with-like check
+of studies/exact-reference/mitsuba_ggx.py), F Schlick's per channel at ⟨v, h⟩,
+h = (l + v)/|l + v|, the map a function constant over each lat-long texel. :func:`ggx_sum`
+integrates it texel by texel, each texel cut into s × s parts of 3 × 3 Gauss–Legendre
+points in (θ, φ), s chosen per sample and texel from the lobe's own scale where the texel
+lies (in half-vector space, where the lobe is round: its width α at the peak, its distance
+from n in the tails; a texel's extent there is its own over 2 ⟨v, h⟩, which grows as the
+view grazes); :func:`ggx_albedo` integrates the lobe under a constant map in half-vector
+space, (θ_h, φ_h) about n, with dl = 4 ⟨v, h⟩ dh.
 """
 
 from __future__ import annotations
@@ -28,9 +30,19 @@ from envstudio.core.latlong import texel_directions, uv_to_direction
 _X, _W = np.polynomial.legendre.leggauss(3)
 
 
-def ggx_lobe(n, v, light, alpha: float, fresnel) -> np.ndarray:
-    """D G2 F(v·h) / (4 ⟨n, v⟩), zero where ⟨n, l⟩ ≤ 0; (..., 3 channels) for n, v and the
-    light directions l (..., 3) that broadcast together."""
+#: The Smith masking-shadowing terms :func:`ggx_lobe` knows: ours (shaders/common/sampling.glsl)
+#: and Mitsuba 3's (``MicrofacetDistribution::G`` of render/microfacet.h).
+SMITH_TERMS = ("correlated", "separable")
+
+
+def ggx_lobe(n, v, light, alpha: float, fresnel, smith: str = "correlated") -> np.ndarray:
+    """D G F(v·h) / (4 ⟨n, v⟩), zero where ⟨n, l⟩ ≤ 0; (..., 3 channels) for n, v and the
+    light directions l (..., 3) that broadcast together.
+
+    G is the height-correlated Smith G2 (``smith="correlated"``, the reference's) or the
+    separable G1(v) G1(l), G1(x) = 2 ⟨n, x⟩ / (⟨n, x⟩ + √(α² + (1 − α²) ⟨n, x⟩²))
+    (``"separable"``, Mitsuba 3's ``roughconductor``).
+    """
     n_dot_l = np.sum(n * light, axis=-1)
     n_dot_v = np.sum(n * v, axis=-1)
     h = light + v
@@ -40,12 +52,17 @@ def ggx_lobe(n, v, light, alpha: float, fresnel) -> np.ndarray:
     a2 = alpha * alpha
     d = a2 / (math.pi * (n_dot_h * n_dot_h * (a2 - 1.0) + 1.0) ** 2)
     nl = np.maximum(n_dot_l, 0.0)
-    shadow = n_dot_v * np.sqrt(nl * nl * (1.0 - a2) + a2)
-    mask = nl * np.sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2)
-    g2 = 2.0 * nl * n_dot_v / np.maximum(shadow + mask, 1e-300)
+    root_l = np.sqrt(nl * nl * (1.0 - a2) + a2)
+    root_v = np.sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2)
+    if smith == "correlated":
+        g = 2.0 * nl * n_dot_v / np.maximum(n_dot_v * root_l + nl * root_v, 1e-300)
+    elif smith == "separable":
+        g = 4.0 * nl * n_dot_v / np.maximum((nl + root_l) * (n_dot_v + root_v), 1e-300)
+    else:
+        raise ValueError(f"smith={smith!r}: expected one of {SMITH_TERMS}")
     f0 = np.asarray(fresnel, dtype=np.float64)
     f = f0 + (1.0 - f0) * ((1.0 - np.clip(v_dot_h, 0.0, 1.0)) ** 5)[..., None]
-    return np.where(n_dot_l > 0.0, d * g2 / (4.0 * n_dot_v), 0.0)[..., None] * f
+    return np.where(n_dot_l > 0.0, d * g / (4.0 * n_dot_v), 0.0)[..., None] * f
 
 
 def ggx_sum(
@@ -59,12 +76,14 @@ def ggx_sum(
     horizon_split: int = 4,
     bright_split: int = 64,
     budget: int = 1 << 21,
+    smith: str = "correlated",
 ) -> npt.NDArray[np.float64]:
     """The GGX term of each (n, v) under the lat-long ``radiance`` (h, w, 3); (s, 3).
 
     A texel is cut into s × s parts, s the least power of two (at most ``max_split``) that
     makes a part's extent in half-vector space under ``ratio`` × max(α, the texel's
-    distance from n there); each part takes 3 × 3 Gauss points.
+    distance from n there); each part takes 3 × 3 Gauss points. ``smith`` picks the
+    masking-shadowing term (:func:`ggx_lobe`).
     """
     image = np.asarray(radiance, dtype=np.float64)
     normals = np.asarray(normals, dtype=np.float64)
@@ -108,7 +127,9 @@ def ggx_sum(
                 d_omega = (math.pi / h * weight * np.sin(theta))[:, :, None] * (
                     2.0 * math.pi / w * weight
                 )
-                lobe = ggx_lobe(n[si][:, None, None], v[si][:, None, None], light, alpha, fresnel)
+                lobe = ggx_lobe(
+                    n[si][:, None, None], v[si][:, None, None], light, alpha, fresnel, smith
+                )
                 part = np.einsum("pabc,pab->pc", lobe, d_omega) * texel_radiance[ti]
                 np.add.at(out, first + si, part)
     return out
