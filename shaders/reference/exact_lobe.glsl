@@ -60,6 +60,15 @@ const float BANKS_INSIDE = 1.5;
 // single samples).
 const float GGX_TAIL = 2.0;
 const float BANKS_EDGE = 1.0;
+// GGX across the horizon <n, l> = 0, where the lobe has a kink: just above it the lobe rises
+// as k <n, l> with k = D F / (4 <n, v>) dG2/d<n, l> = D F / (2 alpha <n, v>) (G2 ~ 2 <n, l> /
+// alpha there), and the three-point rule over a node of radius rho across it errs by about
+// k rho^3 of its radiance: nodes there are refined to rho^2 k under this.
+// Against tests/microfacet_numpy_reference.py on a sphere under a small sun (32 x 64 map,
+// 584 pixel centres): without it up to 23 % at alpha = 0.5 (its largest at the pixels whose
+// horizon crosses the sun), with 3e-4 at most 1.2 % at every alpha (1e-4: 1.1 %); on the
+// sunrise sphere at 96 x 96 x 16 samples it costs 1.6 times the time at N = 10, 1.1 at 1000.
+const float HORIZON_TOLERANCE = 3e-4;
 const int STACK = STACK_SIZE;
 
 // Sample frame, set once per invocation.
@@ -111,9 +120,17 @@ int classify(vec3 d, float rho, out int split) {
     if (u_model == 1) {
         vec3 h = normalize(d + g_v);
         float rho_h = rho / (2.0 * max(dot(g_v, h), 1e-3));
-        float scale = u_accept * max(u_alpha, GGX_TAIL * (angle_between(g_n, h) - rho_h));
+        float from_h = angle_between(g_n, h);
+        float scale = u_accept * max(u_alpha, GGX_TAIL * (from_h - rho_h));
         split = int(clamp(ceil(rho_h / scale), 2.0, float(MAX_SPLIT)));
-        return rho_h <= scale ? 1 : 2;
+        bool accepted = rho_h <= scale;
+        if (from_n + rho > 0.5 * PI) {  // across the horizon
+            float k = ggx_d(cos(max(from_h - rho_h, 0.0)), u_alpha) / (2.0 * u_alpha * g_n_dot_v);
+            float widest = sqrt(HORIZON_TOLERANCE / max(k, 1e-20));
+            split = int(clamp(max(float(split), ceil(rho / widest)), 2.0, float(MAX_SPLIT)));
+            accepted = accepted && rho <= widest;
+        }
+        return accepted ? 1 : 2;
     }
     // banks: inside the band the lobe is cos(angle(l, t) - psi) - s, which the three-point
     // rule takes exactly to third order, so nodes of a fraction of the band's width pass; its

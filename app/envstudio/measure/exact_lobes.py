@@ -14,11 +14,13 @@ environment's mip pyramid (prefilter.hierarchical.source_pyramid): a node is tak
 radiance moments where the lobe is smooth over it (a three-point rule exact for quadratics;
 for GGX its cap in half-vector space under :data:`ACCEPT` times max(α, twice its distance
 to n: the tail, a power of that distance, takes nodes twice as wide as the peak would),
-for Banks under 1.5 :data:`ACCEPT` times the band's half width inside the band and
-:data:`ACCEPT` times it across its edges, where the lobe has a kink), skipped where the lobe is zero
-over it, refined otherwise, and a texel still refined is cut into parts finer than the
-lobe. What that leaves out is measured, not assumed: exact_reference.checked_error holds
-the result against a plain sum over Gauss points of every texel
+and across the horizon ⟨n, l⟩ = 0, where G2 has a kink, finer still where the lobe rises
+steeply from it; for Banks under 1.5 :data:`ACCEPT` times the band's half width inside the
+band and :data:`ACCEPT` times it across its edges, where the lobe has a kink), skipped
+where the lobe is zero over it, refined otherwise, and a texel still refined is cut into
+parts finer than the lobe. What that leaves out is measured, not assumed:
+exact_reference.checked_error holds the result against a plain sum over Gauss points of
+every texel
 (exact_reference.brute_force_radiance, with :func:`microfacet_lobe` and :func:`banks_lobe`),
 the same anchor as the ``phong`` model's.
 """
