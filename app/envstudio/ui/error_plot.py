@@ -247,7 +247,11 @@ def glossiness_section(
         if len(ys):
             low, high = ys.min() / MARGIN, ys.max() * MARGIN
             implot.setup_axis_limits(implot.ImAxis_.y1, low, high, implot.Cond_.always)
-        implot.setup_legend(implot.Location_.south_west, implot.LegendFlags_.no_buttons)
+        # beside the plot, not over it: a legend of every method covers the low-N points
+        implot.setup_legend(
+            implot.Location_.north_east,
+            implot.LegendFlags_.outside | implot.LegendFlags_.no_buttons,
+        )
         for name in curve.errors:
             xs, ys = measured_points(curve, name)
             implot.plot_line(name, xs, ys, implot.Spec(marker=implot.Marker_.circle))
