@@ -63,9 +63,9 @@ def _measure(
     size: tuple[int, int],
     ssaa: int,
 ) -> None:
-    """The child: measure the pickled (scene, camera) in ``snapshot`` step by step, sending
-    (points done, :class:`ErrorCurve`) after each step, or the first line of the
-    :class:`UserError` that stopped it."""
+    """The child: measure the pickled (scene, camera) in the file ``snapshot`` (removed once
+    read) step by step, sending (points done, :class:`ErrorCurve`) after each step, or the
+    first line of the :class:`UserError` that stopped it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the viewer handles Ctrl-C and stops us
     os.nice(NICE)  # before the context: llvmpipe's threads inherit it
     # tqdm's default lock is a named semaphore, which a terminated child would leave to
@@ -74,6 +74,7 @@ def _measure(
     tqdm.set_lock(threading.RLock())
     with open(snapshot, "rb") as file:
         scene, camera = pickle.load(file)
+    os.unlink(snapshot)  # read: nothing left behind if the window is killed meanwhile
     try:
         session = RenderSession(scene, cube_size=cube_size)
         try:
@@ -195,7 +196,8 @@ class CurveJob:
 
     def stop(self) -> None:
         """End the child now (terminated if it is still measuring) and free the pipe and the
-        scene's copy; the points so far stay in :attr:`curve`. Safe twice."""
+        scene's copy (if the child ended before reading it); the points so far stay in
+        :attr:`curve`. Safe twice."""
         process, self._process = self._process, None
         if process is not None:
             if process.is_alive():
