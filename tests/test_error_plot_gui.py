@@ -32,4 +32,4 @@ def test_the_section_draws_a_partial_curve_with_its_progress_and_the_current_n(g
     for _ in range(2):
         draw_frame(gui, lambda: picked.append(glossiness_section(plot, ["mirror"], 100.0)))
     assert picked == [None, None]
-    assert plot.progress() == "0 of 4"
+    assert plot.progress() == "0 of 4, waiting for a still view"

@@ -16,6 +16,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -577,3 +578,34 @@ def test_the_grids_labels_give_compares_exact_numbers_in_the_window(xvfb, tmp_pa
         assert numbers["against"] == f"exact {size[0]}×{size[1]}", numbers
         assert numbers["relative_error"] == pytest.approx(row.median_relative_error, abs=1e-3)
         assert numbers["psnr_db"] == pytest.approx(row.metrics.psnr_db, abs=1e-3)
+
+
+def test_the_window_keeps_drawing_while_the_glossiness_curve_is_measured(xvfb, tmp_path):
+    """Issue 40 item 5: the Compare panel's curve is measured by a child process. From the
+    measurement's start to its first point (mirror at N = 20: its exact reference takes
+    about a second here, which measuring between frames stalled the window for) the window
+    keeps drawing frames, none of them late; closing the window with the second point still
+    being measured ends the viewer at once, its child and its threads gone."""
+    config = tmp_path / "config"
+    config.mkdir()
+    (config / "settings.json").write_text(json.dumps({"window_size": list(WINDOW)}))
+    probe = tmp_path / "probe.json"
+    result = run_view(
+        config,
+        xvfb,
+        *("--method", "mirror", "--frames", "1500"),
+        probe=probe,
+        env={"ENVSTUDIO_PROBE_CURVE": "2;mirror;20,50;32", "ENVSTUDIO_PROBE_FRAME_MS": "30"},
+    )
+    ended_at = time.time()
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stderr and "leaked" not in result.stderr
+    curve = json.loads(probe.read_text())["curve"]
+    frames = np.array(curve["frames"])
+    measuring = frames[(frames[:, 2] == 1) & (frames[:, 1] == 0)]
+    assert frames[-1, 1] == 1, "the window closed before the first point"
+    assert len(measuring) >= 20, f"{len(measuring)} frames while measuring"
+    gaps = np.diff(frames[:, 0])
+    assert gaps.max() < 0.5, f"a frame {gaps.max():.2f} s after the one before"
+    assert ended_at - curve["closed_at"] < 5.0, "the viewer took long to end"
+    assert curve["children_after"] == 0 and curve["threads_after"] == 1

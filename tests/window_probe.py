@@ -20,13 +20,22 @@ handlers, as the window toolkit would; ``ENVSTUDIO_PROBE_KEY=FRAME,NAME`` presse
 (moderngl-window's name, e.g. F12) before frame FRAME. ``ENVSTUDIO_PROBE_FRAME_MS=MS``
 makes each frame last at least MS milliseconds (the grid's timed steps then get a known
 wall time from ``--frames``).
+
+``ENVSTUDIO_PROBE_CURVE=FRAME;NAMES;EXPONENTS;SIZE`` (``2;mirror;20,50;32``) starts the
+Compare panel's glossiness curve of methods NAMES at Phong exponents EXPONENTS and
+SIZE x SIZE pixels before frame FRAME, as its button does, records each frame's wall
+time (perf_counter) and the points done from then on, and closes the window in the frame
+the first point arrives, the measurement still running. After the viewer has ended it
+records the child processes and threads still there.
 """
 
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import sys
+import threading
 import time as clock
 from dataclasses import asdict
 from typing import ClassVar
@@ -36,15 +45,29 @@ from imgui_bundle.imgui import internal
 import envstudio.ui.app as app
 from envstudio.cli import main
 from envstudio.ui.docking import PANELS, gl_viewport
+from envstudio.ui.error_plot import GlossinessCurve
 
 
 class ProbedViewer(app.Viewer):
     """The viewer, recording its layout after every frame."""
 
     record: ClassVar[dict] = {}
+    curve_frames: ClassVar[list] = []
+    """[perf_counter, points done, measuring] after each frame once the curve started."""
+    closed_at: ClassVar[float | None] = None
+    """time.time() when the probe closed the window on the curve's first point."""
 
     def on_render(self, time: float, frametime: float) -> None:
         started = clock.perf_counter()
+        curve = os.environ.get("ENVSTUDIO_PROBE_CURVE")
+        if curve:
+            frame, names, exponents, size = curve.split(";")
+            if int(frame) == self.frames_drawn:
+                n = int(size)
+                self.panels.curve = GlossinessCurve(
+                    [float(e) for e in exponents.split(",")], (n, n)
+                )
+                self.panels.curve.start(names.split(","))
         click = os.environ.get("ENVSTUDIO_PROBE_CLICK")
         if click:
             frame, x, y = (int(v) for v in click.split(","))
@@ -60,6 +83,12 @@ class ProbedViewer(app.Viewer):
                 keys = self.wnd.keys
                 self.on_key_event(getattr(keys, name), keys.ACTION_PRESS, self.wnd.modifiers)
         super().on_render(time, frametime)
+        if curve and self.frames_drawn > int(frame):
+            plot = self.panels.curve
+            self.curve_frames.append([clock.perf_counter(), plot.done, plot.measuring])
+            if plot.done >= 1 and ProbedViewer.closed_at is None:
+                ProbedViewer.closed_at = clock.time()
+                self.wnd.close()
         hdr = self.session.renderer.hdr_texture
         panels = {}
         for name in PANELS:
@@ -110,6 +139,13 @@ class ProbedViewer(app.Viewer):
 def probe(out: str, argv: list[str]) -> int:
     app.Viewer = ProbedViewer
     status = main(argv)
+    if ProbedViewer.curve_frames:
+        ProbedViewer.record["curve"] = {
+            "frames": ProbedViewer.curve_frames,
+            "closed_at": ProbedViewer.closed_at,
+            "children_after": len(multiprocessing.active_children()),
+            "threads_after": threading.active_count(),
+        }
     with open(out, "w", encoding="utf-8") as file:
         json.dump(ProbedViewer.record, file)
     return status

@@ -33,11 +33,6 @@ from envstudio.measure.reference_runs import EXACT
 #: curve's axis; the other exact models (banks) have no point on it.
 CURVE_MODELS = ("phong", "microfacet")
 NO_EXPONENT = "has no Phong exponent (its lobe's width is its sharpness)"
-#: Why the window's curve leaves microfacet out (ui/error_plot.py measures between frames).
-SLOW_IN_WINDOW = (
-    "takes seconds a point for its exact reference on this renderer, too long between "
-    "frames: es.error_curve measures it"
-)
 
 
 @dataclass
@@ -77,15 +72,13 @@ class ErrorCurve:
         return out
 
 
-def curve_methods(
-    names: Sequence[str], models: Sequence[str] = CURVE_MODELS
-) -> tuple[list[str], list[str]]:
+def curve_methods(names: Sequence[str]) -> tuple[list[str], list[str]]:
     """``names`` split into those with an exact reference and notes on the others.
 
     Returns
     -------
     kept : list of str
-        The methods of a reflectance model in ``models`` (of :data:`CURVE_MODELS`), in order.
+        The methods of a reflectance model in :data:`CURVE_MODELS`, in order.
     notes : list of str
         "banks: reflectance model banks has no Phong exponent (its lobe's width is its
         sharpness)", one per method left out.
@@ -93,10 +86,8 @@ def curve_methods(
     kept, notes = [], []
     for name in names:
         model = method_class(name).reflectance
-        if model in models:
+        if model in CURVE_MODELS:
             kept.append(name)
-        elif model in CURVE_MODELS:
-            notes.append(f"{name}: reflectance model {model} {SLOW_IN_WINDOW}")
         elif model in EXACT_MODELS:
             notes.append(f"{name}: reflectance model {model} {NO_EXPONENT}")
         else:
@@ -184,16 +175,14 @@ def error_curve(
 
 
 class CurveSteps:
-    """:func:`error_curve` one exponent at a time (the viewer's glossiness plot takes a step
-    a frame): after :attr:`total` calls of :meth:`step`, :attr:`curve` holds what
-    :func:`error_curve` returns for the same arguments.
+    """:func:`error_curve` one exponent at a time (the viewer's background measurement,
+    measure/curve_job.py, sends the points after each): after :attr:`total` calls of
+    :meth:`step`, :attr:`curve` holds what :func:`error_curve` returns for the same arguments.
 
     Parameters
     ----------
     session, names, exponents, size, ssaa, parameters
         As :func:`error_curve`'s; the camera is read at each step.
-    models : sequence of str
-        The reflectance models measured (of :data:`CURVE_MODELS`; the others get a note).
 
     Raises
     ------
@@ -210,9 +199,8 @@ class CurveSteps:
         size: tuple[int, int],
         ssaa: int,
         parameters: Sequence[str] = (),
-        models: Sequence[str] = CURVE_MODELS,
     ):
-        kept, notes = curve_methods(names, models)
+        kept, notes = curve_methods(names)
         if not kept:
             raise ParameterError(
                 f"methods {list(names)!r}: none has an exact reference along N ({'; '.join(notes)})"

@@ -4,7 +4,8 @@ around it.
 Each frame::
 
     run the jobs announced last frame (file loads)       DeferredWork.run_due
-    poll "Open..." dialogs; the glossiness plot's step    ViewerPanels.step
+    poll "Open..." dialogs; the glossiness plot's points  ViewerPanels.step
+      (measured by a child process: ui/error_plot.py)
     cycle methods; turntable
     imgui.new_frame → menu bar, dock space → the view's rectangle (ui/docking.py)
     panels, status line                                  ui/viewer_panels.py

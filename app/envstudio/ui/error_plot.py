@@ -2,17 +2,16 @@
 
 "Measure glossiness curve" measures, for the scene and camera on show, each method's
 approximation error against the exact untraced reference at :data:`EXPONENTS` (the
-Phong exponent N, 5 to 5000), as ``es.error_curve`` does (measure/error_curve.py): one
-exponent a frame (:class:`GlossinessCurve`), each step taken once the view has stayed
-unchanged for :data:`STILL_S`. A step renders every method and the exact reference at
-:data:`SIZE` (about two seconds on a software rasteriser): the window pauses for that
-long, then draws a frame with the progress ("3 of 10"). Moving the camera or changing
-the scene starts the points again for the new view; a finished curve stays shown,
-marked as measured for an earlier view.
+Phong exponent N, 5 to 5000; a GGX α matched to each N, α = √(2 / (4N + 2))), as
+``es.error_curve`` does (measure/error_curve.py): the Phong methods and the microfacet
+one (splitsum); banks, whose lobe no Phong exponent sets, gets a note.
 
-The measurement runs in a session of its own sharing the window's context (the curve
-sets each method's N and the display's defaults; the window's methods keep their
-values), with a copy of the camera taken when the points start.
+The points are measured in the background, in a child process with its own context
+(measure/curve_job.py says why a process): the window draws at its own rate, takes the
+points as they arrive and shows the progress ("3 of 10, 40 s left") in a bar. A job starts
+once the view has stayed unchanged for :data:`STILL_S`, with a copy of the scene and the
+camera; moving the camera or changing the scene stops it and starts the points again for
+the new view. A finished curve stays shown, marked as measured for an earlier view.
 
 The plot (ImPlot, log–log): each method's median relative error against N, the current
 N (the method on show's, else the ground truth's, which the matching goes through) as a
@@ -21,7 +20,6 @@ vertical line. Clicking near a curve, or on its legend entry, selects that metho
 
 from __future__ import annotations
 
-import copy
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -31,21 +29,17 @@ from imgui_bundle import imgui, implot
 
 from envstudio.engine.method import Method
 from envstudio.engine.session import RenderSession
-from envstudio.errors import UserError
-from envstudio.measure.error_curve import CurveSteps, ErrorCurve
+from envstudio.measure.curve_job import CurveJob
+from envstudio.measure.error_curve import ErrorCurve
 
 EXPONENTS = (5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0)
 """The Phong exponents N measured, as es.error_curve's default."""
-#: The models the window's curve measures: Phong's exact reference takes a fraction of a
-#: second a point; the microfacet one's GPU descent takes seconds on a software renderer, too
-#: long between two frames (es.error_curve measures it).
-WINDOW_MODELS = ("phong",)
 SIZE = (64, 64)
 #: Both axes reach this factor past the first and last values (their markers whole).
 MARGIN = 1.3
 SSAA = 2
 STILL_S = 0.3
-"""Seconds the view must stay unchanged before a step is taken."""
+"""Seconds the view must stay unchanged before a measurement starts."""
 PICK_DECADES = 0.25
 """A click selects the curve nearest in log10 error when it is at most this far."""
 PLOT_HEIGHT = 220.0
@@ -65,15 +59,21 @@ def view_key(session: RenderSession) -> tuple:
     )
 
 
+def duration(seconds: float) -> str:
+    """``seconds`` as the progress bar says it: "40 s", "2 min 05 s"."""
+    whole = round(seconds)
+    return f"{whole} s" if whole < 60 else f"{whole // 60} min {whole % 60:02d} s"
+
+
 class GlossinessCurve:
-    """The points of the error-against-N curve, measured a step at a time.
+    """The points of the error-against-N curve, measured in the background.
 
     Parameters
     ----------
     exponents, size, ssaa
         As :func:`envstudio.measure.error_curve.error_curve`'s.
     clock
-        Seconds, monotonic (:func:`time.monotonic`).
+        Seconds, monotonic (:func:`time.monotonic`): when the view is still.
     """
 
     def __init__(
@@ -87,8 +87,7 @@ class GlossinessCurve:
         self.size, self.ssaa = size, ssaa
         self._clock = clock
         self._wanted: list[str] | None = None
-        self._steps: CurveSteps | None = None
-        self._session: RenderSession | None = None
+        self._job: CurveJob | None = None
         self._view: tuple | None = None
         self._still_since = 0.0
         self.curve: ErrorCurve | None = None
@@ -104,9 +103,14 @@ class GlossinessCurve:
         return self._wanted is not None
 
     @property
+    def measuring(self) -> bool:
+        """Whether a child process is measuring now (not waiting for a still view)."""
+        return self._job is not None
+
+    @property
     def done(self) -> int:
-        """Exponents measured for the current view."""
-        return self._steps.done if self._steps is not None else 0
+        """Exponents measured so far by the measurement running now (0 when none runs)."""
+        return self._job.done if self._job is not None else 0
 
     @property
     def total(self) -> int:
@@ -114,77 +118,62 @@ class GlossinessCurve:
         return len(self.exponents)
 
     def progress(self) -> str:
-        """The progress, "3 of 10", while running; "" otherwise."""
-        return f"{self.done} of {self.total}" if self.running else ""
+        """The progress while running: "3 of 10, 40 s left" (the time once a point has
+        come), "0 of 10, waiting for a still view" before the measurement starts; ""
+        otherwise."""
+        if not self.running:
+            return ""
+        counted = f"{self.done} of {self.total}"
+        if not self.measuring:
+            return f"{counted}, waiting for a still view"
+        left = self._job.seconds_left()
+        return counted if left is None else f"{counted}, {duration(left)} left"
 
     def start(self, names: Sequence[str]) -> None:
         """Measure ``names`` (those without an exact reference are left out with a note)
-        from the next still frame on."""
-        self._drop_steps()
+        once the view is still."""
+        self._end_job()
         self._wanted = list(names)
         self.error = None
 
     def stop(self) -> None:
         """Stop measuring; the points so far stay in :attr:`curve`."""
         self._wanted = None
-        self._drop_steps(keep_curve=True)
+        self._end_job(keep_curve=True)
 
-    def update(self, session: RenderSession) -> bool:
-        """Call every frame before drawing: notice a change of view, and take a step when one
-        is due. Returns whether a step was taken."""
+    def update(self, session: RenderSession) -> None:
+        """Call every frame; never waits. Notices a change of view (which stops the
+        measurement), starts one once the view is still, and takes the points that came."""
         now, view = self._clock(), view_key(session)
         if view != self._view:
             self._view, self._still_since = view, now
             if self.curve is not None and not self.running:
                 self.stale = True
-            if self._steps is not None:  # the points so far were for another view
-                self._drop_steps()
-            return False
-        if not self.running or now - self._still_since < STILL_S:
-            return False
-        if self._steps is None:
-            try:
-                self._begin(session)
-            except UserError as exc:
-                self.error = str(exc).splitlines()[0]
-                self.stop()
-                return False
-        try:
-            self._steps.step()
-        except UserError as exc:
-            self.error = str(exc).splitlines()[0]
+            self._end_job()  # the points so far were for another view
+            return
+        if self._job is None:
+            if self.running and now - self._still_since >= STILL_S:
+                self._job = CurveJob(session, self._wanted, self.exponents, self.size, self.ssaa)
+                self.curve, self.stale = None, False
+            return
+        self._job.poll()
+        self.curve = self._job.curve
+        if self._job.error is not None:
+            self.error = self._job.error
             self.stop()
-            return True
-        if self._steps.finished:
-            self._wanted = None
-            self._drop_steps(keep_curve=True)
-        return True
+        elif self._job.finished:
+            self.stop()
 
-    def _begin(self, session: RenderSession) -> None:
-        own = RenderSession(session.scene, ctx=session.ctx, cube_size=session.gpu_scene.cube_size)
-        own.camera = copy.deepcopy(session.camera)
-        try:
-            self._steps = CurveSteps(
-                own, self._wanted, self.exponents, self.size, self.ssaa, models=WINDOW_MODELS
-            )
-        except BaseException:
-            own.release()
-            raise
-        self._session = own
-        self.curve, self.stale = self._steps.curve, False
-
-    def _drop_steps(self, keep_curve: bool = False) -> None:
-        if self._steps is not None and not keep_curve:
-            self.curve = None
-        self._steps = None
-        if self._session is not None:
-            self._session.release()
-            self._session = None
+    def _end_job(self, keep_curve: bool = False) -> None:
+        if self._job is not None:
+            self._job.stop()
+            self._job = None
+            if not keep_curve:
+                self.curve = None
 
     def release(self) -> None:
-        """Free the measuring session; safe twice."""
-        self._wanted = None
-        self._drop_steps(keep_curve=True)
+        """Stop the measurement, its process ended; safe twice."""
+        self.stop()
 
 
 def measured_points(curve: ErrorCurve, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -231,9 +220,10 @@ def glossiness_section(
         plot.stop() if plot.running else plot.start(names)
     imgui.set_item_tooltip(
         "Each method's median relative error against the exact untraced reference at "
-        f"N = {', '.join(f'{n:g}' for n in plot.exponents)}, for this scene and camera "
-        f"({plot.size[0]}x{plot.size[1]}, {plot.ssaa}x{plot.ssaa} samples a pixel), one N "
-        "a frame while the view is still. Click a curve to show its method."
+        f"N = {', '.join(f'{n:g}' for n in plot.exponents)} (GGX alpha matched to N), for "
+        f"this scene and camera ({plot.size[0]}x{plot.size[1]}, {plot.ssaa}x{plot.ssaa} "
+        "samples a pixel), measured in the background once the view is still; moving the "
+        "camera starts it again. Click a curve to show its method."
     )
     if plot.running:
         imgui.same_line()
@@ -257,7 +247,11 @@ def glossiness_section(
         if len(ys):
             low, high = ys.min() / MARGIN, ys.max() * MARGIN
             implot.setup_axis_limits(implot.ImAxis_.y1, low, high, implot.Cond_.always)
-        implot.setup_legend(implot.Location_.south_west, implot.LegendFlags_.no_buttons)
+        # beside the plot, not over it: a legend of every method covers the low-N points
+        implot.setup_legend(
+            implot.Location_.north_east,
+            implot.LegendFlags_.outside | implot.LegendFlags_.no_buttons,
+        )
         for name in curve.errors:
             xs, ys = measured_points(curve, name)
             implot.plot_line(name, xs, ys, implot.Spec(marker=implot.Marker_.circle))

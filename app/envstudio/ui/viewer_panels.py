@@ -70,7 +70,7 @@ class ViewerPanels:
         self.jobs = jobs
         self.status = status
         self.curve = GlossinessCurve()
-        """The Compare panel's error-against-glossiness plot (measured by :meth:`step`)."""
+        """The Compare panel's error-against-glossiness plot (its points taken by :meth:`step`)."""
         self.dialogs = SceneDialogs(
             OpenFileDialog("Open environment", "HDR environments", HDR_SUFFIXES),
             OpenFileDialog("Open mesh", "Meshes", MESH_SUFFIXES),
@@ -101,8 +101,8 @@ class ViewerPanels:
             self.captures.request(self.captures.options.fmt)
 
     def step(self) -> None:
-        """Take the glossiness plot's next measurement when one is due (call at frame start:
-        it renders offscreen in a session of its own)."""
+        """Start, restart or stop the glossiness plot's background measurement as the view
+        changes and take the points it has sent (call at frame start; never waits)."""
         self.curve.update(self.session)
 
     def poll_dialogs(self) -> None:
@@ -117,7 +117,7 @@ class ViewerPanels:
             self.jobs.submit(f"loading {mesh.name}", lambda: self.control.load_mesh(mesh))
 
     def close(self) -> None:
-        """Close any dialog still open; free the plot's session."""
+        """Close any dialog still open; end the plot's measuring process."""
         self.dialogs.environment.close()
         self.dialogs.mesh.close()
         self.curve.release()
