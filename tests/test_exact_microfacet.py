@@ -79,7 +79,7 @@ def frames_for(name: str) -> tuple[np.ndarray, np.ndarray]:
 GRAZING_ISSUE = (
     "exact_lobe.glsl cuts a texel into at most MAX_SPLIT = 16 parts a side: at a "
     "grazing view the reflected lobe (about 2α ⟨v, h⟩ across the plane of incidence) is "
-    "narrower than a part (measured: 17 % off here, 47 % at ⟨n, v⟩ = 0.05; 12 % on a "
+    "narrower than a part (measured: 12 % off here, 47 % at ⟨n, v⟩ = 0.05; 12 % on a "
     "512 × 1024 map at ⟨n, v⟩ = 0.05, where GGX_TAIL's wider nodes add to it)"
 )
 
