@@ -139,8 +139,10 @@ def test_a_constant_environment_gives_the_constant_times_the_albedo(gl_ctx, prog
 def test_every_pixel_of_a_sphere_under_a_small_sun_matches_the_numpy_sum(alpha):
     """A sphere has a band of pixels whose horizon ⟨n, l⟩ = 0 crosses the sun, where the
     lobe has a kink (G2 ~ ⟨n, l⟩): random frames rarely meet one. Every pixel centre within
-    1.5 %, the mean within 0.1 % (measured: 1.1 % and 1.2 % at most; 23 % and 8.4 % before
-    the nodes across the horizon were refined, exact_lobe.glsl's HORIZON_TOLERANCE)."""
+    0.3 %, the mean within 0.03 % (measured: 0.08 % and 0.05 % at most, 0.028 % and 0.019 %
+    on the mean; 23 % and 8.4 % at most before the nodes across the horizon were refined,
+    exact_lobe.glsl's HORIZON_TOLERANCE, 1.1 % and 1.2 % before nodes brighter than the map's
+    mean were refined, BRIGHT_POWER)."""
     camera = OrbitCamera(azimuth=30.0, elevation=15.0, distance=3.0, fov_y=45.0)
     scene = Scene(Environment(sun_map()), [Node("sphere", uv_sphere(1.0, 48, 96))], camera, "s")
     session = RenderSession(scene, cube_size=16)
@@ -158,7 +160,7 @@ def test_every_pixel_of_a_sphere_under_a_small_sun_matches_the_numpy_sum(alpha):
         session.release()
     error = relative(exact, ggx_sum(scene.environment.radiance, n, v, alpha, (1.0, 1.0, 1.0)))
     assert len(error) > 500
-    assert error.max() < 1.5e-2 and error.mean() < 1e-3, (error.max(), error.mean())
+    assert error.max() < 3e-3 and error.mean() < 3e-4, (error.max(), error.mean())
 
 
 def test_a_grazing_view_of_a_lobe_far_narrower_than_a_texel(gl_ctx, programs):

@@ -42,6 +42,7 @@ uniform int u_first_sample;
 uniform int u_samples;
 uniform int u_model;            // 1 microfacet, 2 banks
 uniform float u_accept;
+uniform float u_mean_radiance;  // the map's mean radiance, its largest channel (sr^-1 W)
 uniform float u_alpha;
 uniform vec3 u_fresnel;
 uniform bool u_banks_normalize;
@@ -64,12 +65,20 @@ const float BANKS_EDGE = 1.0;
 // as k <n, l> with k = D F / (4 <n, v>) dG2/d<n, l> = D F / (2 alpha <n, v>) (G2 ~ 2 <n, l> /
 // alpha there), and the three-point rule over a node of radius rho across it errs by about
 // k rho^3 of its radiance: nodes there are refined to rho^2 k under this.
-// Against tests/microfacet_numpy_reference.py on a sphere under a small sun (32 x 64 map,
-// 584 pixel centres): without it up to 23 % at alpha = 0.5 (its largest at the pixels whose
-// horizon crosses the sun), with 3e-4 at most 1.2 % at every alpha (1e-4: 1.1 %); on the
-// sunrise sphere at 96 x 96 x 16 samples it costs 1.6 times the time at N = 10, 1.1 at 1000.
+// k grows with the node's brightness over the map's mean, as BRIGHT_POWER's scale. Against
+// tests/microfacet_numpy_reference.py on a sphere under a small sun (32 x 64 map, 584 pixel
+// centres): without it up to 23 % at alpha = 0.5 (at the pixels whose horizon crosses the
+// sun), with 3e-4 at most 1.2 % at every alpha (1.1 % with 1e-4; 0.08 % with BRIGHT_POWER too);
+// on the sunrise sphere at 96 x 96 x 16 samples it costs 1.6 times the time at N = 10, 1.1 at 1000.
 const float HORIZON_TOLERANCE = 3e-4;
 const int STACK = STACK_SIZE;
+// A node brighter than the map's mean (a sun) errs in proportion to its radiance, so its
+// acceptance scale shrinks by the cube root of how much brighter it is (the three-point
+// rule errs as the cube of the node's size over the lobe's scale). Against the NumPy sum on
+// a sphere under a small sun (32 x 64 map, 2 x 2-texel sun at 2000, 584 pixel centres): at
+// most 0.08 % instead of 1.14 % (a pixel whose horizon held the sun); 1-5 % more time on the
+// sunrise sphere at 96 x 96 x 16.
+const float BRIGHT_POWER = 1.0 / 3.0;
 
 // Sample frame, set once per invocation.
 vec3 g_n;
@@ -112,7 +121,7 @@ float angle_between(vec3 a, vec3 b) { return atan(length(cross(a, b)), dot(a, b)
 
 // 0: the lobe is zero over the cap (d, rho); 1: smooth over it, take it at the centroid;
 // 2: refine. `split`: parts a texel edge is cut into when it is refined at level 0.
-int classify(vec3 d, float rho, out int split) {
+int classify(vec3 d, float rho, float brightness, out int split) {
     float from_n = angle_between(g_n, d);
     bool shadowed = u_model == 1 || u_self_shadowing;
     split = 4;
@@ -121,11 +130,13 @@ int classify(vec3 d, float rho, out int split) {
         vec3 h = normalize(d + g_v);
         float rho_h = rho / (2.0 * max(dot(g_v, h), 1e-3));
         float from_h = angle_between(g_n, h);
-        float scale = u_accept * max(u_alpha, GGX_TAIL * (from_h - rho_h));
+        float scale = u_accept * max(u_alpha, GGX_TAIL * (from_h - rho_h))
+                      / pow(max(brightness, 1.0), BRIGHT_POWER);
         split = int(clamp(ceil(rho_h / scale), 2.0, float(MAX_SPLIT)));
         bool accepted = rho_h <= scale;
         if (from_n + rho > 0.5 * PI) {  // across the horizon
-            float k = ggx_d(cos(max(from_h - rho_h, 0.0)), u_alpha) / (2.0 * u_alpha * g_n_dot_v);
+            float k = ggx_d(cos(max(from_h - rho_h, 0.0)), u_alpha) / (2.0 * u_alpha * g_n_dot_v)
+                      * max(brightness, 1.0);
             float widest = sqrt(HORIZON_TOLERANCE / max(k, 1e-20));
             split = int(clamp(max(float(split), ceil(rho / widest)), 2.0, float(MAX_SPLIT)));
             accepted = accepted && rho <= widest;
@@ -139,7 +150,8 @@ int classify(vec3 d, float rho, out int split) {
     if (from_t + rho <= g_band_lo || from_t - rho >= g_band_hi) return 0;
     bool inside = from_t - rho >= g_band_lo && from_t + rho <= g_band_hi;
     bool horizon = u_self_shadowing && from_n + rho > 0.5 * PI;
-    float scale = (inside && !horizon ? BANKS_INSIDE : BANKS_EDGE) * u_accept * g_band_half;
+    float scale = (inside && !horizon ? BANKS_INSIDE : BANKS_EDGE) * u_accept * g_band_half
+                  / pow(max(brightness, 1.0), BRIGHT_POWER);
     split = int(clamp(ceil(rho / scale), 2.0, float(MAX_SPLIT)));
     return rho <= scale ? 1 : 2;
 }
@@ -251,7 +263,10 @@ void main() {
         vec4 w = texelFetch(u_radiance, node.xy, node.z);
         if (w.r + w.g + w.b <= 0.0) continue;
         int split;
-        int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, split);
+        // the node's mean radiance over the map's: its error counts that much more
+        float area = node.z == 0 ? latlong_texel_solid_angle(node.xy, u_level0) : PI * w.a * w.a;
+        float brightness = max(w.r, max(w.g, w.b)) / (area * u_mean_radiance);
+        int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, brightness, split);
         if (verdict == 0) continue;
         if (verdict == 1) {
             total += node.z == 0 ? texel_part(node.xy, w.rgb, 1, 0) : w.rgb * node_lobe(node);

@@ -149,6 +149,9 @@ class PyramidTextures:
         for texture in textures:
             texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
         self.textures = textures
+        top = np.asarray(pyramid.radiance[levels - 1]).reshape(3, -1).sum(axis=1)
+        self.mean_radiance = float(max(top.max(), 1e-30) / (4.0 * math.pi))
+        """The map's mean radiance over the sphere, its largest channel (Σ W / 4π)."""
 
     def release(self) -> None:
         for texture in self.textures:
@@ -251,6 +254,7 @@ def glossy_term(
         "u_start_level": textures.start_level,
         "u_model": _MODELS[model.name],
         "u_accept": accept,
+        "u_mean_radiance": textures.mean_radiance,
         "u_alpha": model.alpha,
         "u_fresnel": model.fresnel,
         "u_sharpness": model.sharpness,
