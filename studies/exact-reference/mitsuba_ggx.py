@@ -34,8 +34,8 @@ its paths' spread; the NumPy sums and ours have no noise), the median and larges
 relative difference (largest channel), and for the NumPy separable sum the median over
 pixels and channels of |difference| over Mitsuba's standard error (0.67 for noise alone);
 then the same over the pixels where ours is more than ``OFF_ANCHOR`` off its own anchor,
-the NumPy G2 sum (on the sun map: the pixels whose horizon ⟨n, l⟩ = 0 crosses the sun),
-which shows whose side Mitsuba takes there.
+the NumPy G2 sum, which shows whose side Mitsuba takes there (before ac38e6a: the sun map's
+pixels whose horizon ⟨n, l⟩ = 0 crosses the sun; since then there are none).
 """
 
 from __future__ import annotations
