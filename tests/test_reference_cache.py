@@ -158,7 +158,7 @@ def test_the_grid_finds_compares_reference_and_measures_a_tile_as_compare_did(gl
     plan = plan_parameters(
         method_classes(["kautz"]), ["trace=false", "max_samples=8", f"phong_exponent={exponent:g}"]
     )
-    comparison = run_comparison(  # a saved Monte Carlo reference (an exact one saves nothing)
+    comparison = run_comparison(  # a saved Monte Carlo accumulation, what the grid reads
         session, ["kautz"], size, plan, frames=1, warmup=0, cache=True, reference_kind=MONTE_CARLO
     )
     session.release()

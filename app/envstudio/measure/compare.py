@@ -359,7 +359,8 @@ def run_comparison(
     progress
         Show a progress line on stderr while the reference accumulates.
     cache
-        Resume the reference from, and save it to, measure/ground_truth_cache.py.
+        Resume the reference from, and save it to, measure/ground_truth_cache.py; read an
+        exact frame evaluated before from, and keep a new one in, measure/exact_cache.py.
     strict
         Stop the reference by its tolerance, not by the methods' errors
         (measure/stopping.py; an explicit ``tolerance`` in ``plan`` does too).
@@ -427,11 +428,11 @@ def run_comparison(
             )
         background = next((rendered[n][2] for n in members if n in rendered), None)
         if exact and not traces:  # the untraced model is the reference: nothing to sample
-            runs[model], mask = exact_run(session, reference, size, ssaa, background)
+            runs[model], mask = exact_run(session, reference, size, ssaa, background, cache)
             continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
         if exact and traces:  # a control variate: traced = exact untraced + sampled difference
-            known, known_mask = exact_run(session, reference, size, ssaa, background)
+            known, known_mask = exact_run(session, reference, size, ssaa, background, cache)
             reference.values[UNTRACED_TOO] = True
             runs[model], mask = converge(
                 session, reference, size, progress, False, judge, control=(known.hdr, known_mask)

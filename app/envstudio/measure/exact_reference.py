@@ -33,6 +33,7 @@ same kind of brute-force sum. A plugin's own model has no exact evaluation:
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -153,6 +154,14 @@ def diffuse_radiance(
     return out
 
 
+def exact_inputs(values: dict[str, object]) -> dict[str, object]:
+    """The reference's values the exact evaluation of its model reads (:func:`exact_radiance`):
+    f_λ, k_d and N, or for Banks its lobe's values instead of N."""
+    model = str(values.get("model", "phong"))
+    read = ("fresnel", "kd", *(BANKS_VALUES if model == "banks" else ("phong_exponent",)))
+    return {"model": model} | {name: values[name] for name in read}
+
+
 def lobe_model(values: dict[str, object]) -> LobeModel:
     """The glossy model of the reference's ``values`` (a model in :data:`LOBE_MODELS`)."""
     fresnel = tuple(float(c) for c in np.broadcast_to(values["fresnel"], 3))
@@ -226,9 +235,11 @@ def texel_split(height: int, exponent: float) -> int:
     return int(min(16, max(1, math.ceil(2.0 * (math.pi / height) * math.sqrt(exponent)))))
 
 
+@functools.lru_cache(maxsize=1)
 def gauss_texels(height: int, width: int, split: int) -> tuple[np.ndarray, np.ndarray]:
     """Quadrature points of the lat-long sphere that integrate a function over every texel:
-    each texel cut into ``split`` × ``split`` parts of 3 × 3 Gauss–Legendre points.
+    each texel cut into ``split`` × ``split`` parts of 3 × 3 Gauss–Legendre points. The last
+    set is kept (read-only): every check of a frame and of the next reads the same points.
 
     Returns
     -------
@@ -248,7 +259,9 @@ def gauss_texels(height: int, width: int, split: int) -> tuple[np.ndarray, np.nd
     phi_w = np.tile(gauss * u_half, width * split) * 2.0 * math.pi
     uv = np.stack(np.broadcast_arrays(u[None, :], (theta / math.pi)[:, None]), axis=-1)
     directions = latlong.uv_to_direction(uv.reshape(-1, 2))
-    return directions, (theta_w[:, None] * phi_w[None, :]).ravel()
+    weights = (theta_w[:, None] * phi_w[None, :]).ravel()
+    directions.flags.writeable = weights.flags.writeable = False
+    return directions, weights
 
 
 def _lobe_sums(

@@ -25,6 +25,7 @@ from envstudio.engine.method import Method
 from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.measure import ground_truth_cache
+from envstudio.measure.exact_cache import exact_path, load_frame, save_frame
 from envstudio.measure.exact_lobes import LobeEvaluator
 from envstudio.measure.exact_reference import CheckedError, exact_frame
 from envstudio.measure.ground_truth import (
@@ -326,9 +327,12 @@ def exact_run(
     size: tuple[int, int],
     ssaa: int,
     background: npt.NDArray[np.float32] | None,
+    cache: bool = False,
 ) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
     """The untraced model evaluated exactly at ``ssaa``² samples a pixel (exact_reference.py),
     as a run, and its mask; off the reflectors ``background`` (a method's frame) or black.
+    With ``cache``, a frame of the same inputs evaluated before is read back
+    (measure/exact_cache.py) and a new one kept.
 
     Raises
     ------
@@ -345,27 +349,27 @@ def exact_run(
         tangents = session.renderer.reflector_tangents(
             session.gpu_scene, session.camera, fine, field
         )
-    lobes = LobeEvaluator(session.ctx, session.programs)
-    try:
-        frame = exact_frame(
-            normals,
-            views,
-            session.scene.environment.radiance,
-            values,
-            ssaa,
-            started,
-            lobes,
-            tangents,
-        )
-    finally:
-        lobes.release()
+    radiance = session.scene.environment.radiance
+    path = exact_path(radiance, normals, views, tangents, values, ssaa) if cache else None
+    frame = load_frame(path) if path is not None else None
+    saved = frame is not None
+    if not saved:
+        lobes = LobeEvaluator(session.ctx, session.programs)
+        try:
+            frame = exact_frame(normals, views, radiance, values, ssaa, started, lobes, tangents)
+        finally:
+            lobes.release()
+        if path is not None:
+            save_frame(path, frame)
     if not frame.mask.any():
         empty_mask(session)
     outside = np.zeros_like(frame.hdr) if background is None else background
     hdr = np.where(frame.mask[..., None], frame.hdr, outside).astype(np.float32)
     checked = frame.error
+    how = f"in {frame.seconds:.2f} s"
+    how = f"read back (evaluated {how})" if saved else how
     print(
-        f"reference: exact in {frame.seconds:.2f} s; against the brute force at "
+        f"reference: exact {how}; against the brute force at "
         f"{checked.describe()}: median {100 * checked.median:.2g} %, largest "
         f"{100 * checked.largest:.2g} %",
         file=sys.stderr,
@@ -381,7 +385,7 @@ def exact_run(
         display=display_image(session, hdr),
         stopping_rule=EXACT,
         stopped_by=EXACT,
-        wall_s=frame.seconds,
+        wall_s=time.perf_counter() - started,
         exact_error=frame.error,
     )
     return run, frame.mask

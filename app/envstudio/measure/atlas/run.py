@@ -86,6 +86,9 @@ def run_atlas(
             missing = store.missing(cell, grid.methods)
             if missing:
                 tasks.append((cell, missing, grid.settings, store.folder_of(cell)))
+        # scenes that differ only in N share their Banks reference (measure/exact_cache.py):
+        # one N at a time over the scenes, so parallel workers do not both evaluate it
+        tasks.sort(key=lambda task: task[0].exponent)
         total = sum(len(t[1]) for t in tasks)
         measured = 0
         bar = tqdm(total=total, desc="atlas", unit="cell", file=sys.stderr, disable=not progress)
