@@ -17,7 +17,12 @@ from envstudio.core.latlong import texel_directions, texel_solid_angles
 from envstudio.engine.session import RenderSession
 from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
-from envstudio.measure.exact_reference import eq8_radiance, exact_frame
+from envstudio.measure.exact_reference import (
+    brute_force_radiance,
+    eq8_radiance,
+    exact_frame,
+    exact_radiance,
+)
 from envstudio.measure.ground_truth import PairedEstimates
 from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
@@ -89,6 +94,22 @@ def test_a_constant_environment_gives_the_constant_times_the_albedo():
         cos = np.clip(np.einsum("sk,sk->s", normals, views), 0, 1)
         f = FRESNEL + (1 - FRESNEL) * ((1 - cos) ** 5)[:, None]
         np.testing.assert_allclose(exact, 0.7 * ((1 - f) * KD + f), rtol=2e-4)
+
+
+def test_a_grey_fresnel_and_kd_given_as_numbers_are_their_rgb_triples():
+    radiance = spot_map()
+    normals, views = random_frames(40, seed=3)
+    for fresnel, kd in ((0.5, 0.3), (0.5, [0.3] * 3), ([0.5] * 3, 0.3)):
+        values = {"model": "phong", "fresnel": fresnel, "kd": kd, "phong_exponent": 20.0}
+        triples = values | {"fresnel": [0.5] * 3, "kd": [0.3] * 3}
+        np.testing.assert_array_equal(
+            exact_radiance(radiance, normals, views, values),
+            exact_radiance(radiance, normals, views, triples),
+        )
+        np.testing.assert_array_equal(
+            brute_force_radiance(radiance, normals[:4], views[:4], values),
+            brute_force_radiance(radiance, normals[:4], views[:4], triples),
+        )
 
 
 def test_a_sample_facing_away_reflects_nothing():

@@ -85,8 +85,8 @@ def eq8_terms(
     normals, views : (s, 3) array_like
         Unit shading normals (turned to the seen side of the face) and directions to the
         camera.
-    fresnel, kd : (3,) array_like
-        f_λ and k_d, linear RGB.
+    fresnel, kd : (3,) array_like or float
+        f_λ and k_d, linear RGB (a number: grey).
 
     Returns
     -------
@@ -101,8 +101,8 @@ def eq8_terms(
     v = np.asarray(views, dtype=np.float64)
     cos = np.einsum("sk,sk->s", n, v)
     facing = cos > 0.0
-    glossy = schlick(fresnel, cos) * facing[:, None]
-    diffuse = (1.0 - glossy) * np.asarray(kd, dtype=np.float64) * facing[:, None]
+    glossy = schlick(np.broadcast_to(fresnel, 3), cos) * facing[:, None]
+    diffuse = (1.0 - glossy) * np.broadcast_to(np.asarray(kd, np.float64), 3) * facing[:, None]
     return facing, 2.0 * cos[:, None] * n - v, diffuse, glossy
 
 
@@ -122,7 +122,7 @@ def eq8_radiance(
         The lat-long environment, linear radiance.
     normals, views : (s, 3) array_like
         As :func:`eq8_terms`.
-    fresnel, kd : (3,) array_like
+    fresnel, kd : (3,) array_like or float
         f_λ and k_d.
     exponent : float
         The Phong exponent N.
