@@ -90,3 +90,15 @@ def test_compare_returns_the_table_the_frames_and_an_html_view(studio):
     assert row["psnr_db"] == report.json["methods"]["mirror"]["psnr_db"]
     assert report.images["mirror"].shape == report.reference.shape == (32, 32, 3)
     assert "<table>" in report._repr_html_() and "data:image/png" in report._repr_html_()
+
+
+def test_a_compare_s_values_do_not_leak_into_the_next(studio):
+    """A parameter or display value one call sets is gone at the next: its report equals a
+    call that never set it (kautz's per_pixel, the exposure)."""
+    args = {"size": (32, 32), "ssaa": 1, "frames": 1, "cache": False}
+    plain = es.compare(studio, ["kautz"], **args).json["methods"]["kautz"]
+    es.compare(studio, ["kautz"], per_pixel=True, exposure=2.0, **args)
+    after = es.compare(studio, ["kautz"], **args)
+    assert after.json["display"]["exposure"] == 0.0
+    assert after.json["methods"]["kautz"]["parameters"]["per_pixel"] is False
+    assert after.json["methods"]["kautz"]["psnr_db"] == plain["psnr_db"]

@@ -34,7 +34,7 @@ import numpy.typing as npt
 
 from envstudio import api_arguments as check
 from envstudio.core.images import to_ldr
-from envstudio.engine.session import RenderSession, material_values, render_until_finished
+from envstudio.engine.session import RenderSession, render_until_finished
 from envstudio.errors import InputFileError, ParameterError, file_error
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.time_limit import check_time_limit
@@ -91,8 +91,9 @@ def _session(scene: Scene) -> Iterator[RenderSession]:
     """The process's session of ``scene``, its context current, its camera the scene's own.
 
     One context per process; the scene on the GPU is kept while the same scene is rendered
-    again. A call that fails inside leaves no session behind (whatever it half-built is
-    freed), so the next call starts from a fresh one.
+    again, and every method's values and the display's are reset to a fresh session's (what
+    one call set never leaks into the next). A call that fails inside leaves no session
+    behind (whatever it half-built is freed), so the next call starts from a fresh one.
     """
     global _SESSION, _CONTEXT
     if _CONTEXT is None:
@@ -105,6 +106,7 @@ def _session(scene: Scene) -> Iterator[RenderSession]:
                 _release_session()
                 _SESSION = RenderSession(scene, ctx=_CONTEXT)
             _SESSION.camera = copy.deepcopy(scene.camera)  # placed per call, the scene's kept
+            _SESSION.reset_values()
             yield _SESSION
         except BaseException:
             with suppress(Exception):  # a half-built session may not free cleanly; the error
@@ -154,9 +156,6 @@ def render(
             )
     with _session(scene) as session:
         instance = session.method(method)
-        instance.values.update({p.name: p.default for p in instance.parameters})
-        instance.values.update(material_values(scene), ignore_unknown=True)  # as a fresh one
-        session.renderer.display.update({p.name: p.default for p in session.renderer.display})
         session.apply(instance, assignments)
         if time_limit is not None:
             instance.values["time_limit"] = time_limit

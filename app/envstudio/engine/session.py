@@ -79,6 +79,15 @@ class RenderSession:
             self._methods[name] = method
         return self._methods[name]
 
+    def reset_values(self) -> None:
+        """Every method made so far and the display back to the values a fresh session gives
+        them: the parameters' defaults, the scene's material over them."""
+        material = material_values(self.scene)
+        for method in self._methods.values():
+            method.values.update({p.name: p.default for p in method.parameters})
+            method.values.update(material, ignore_unknown=True)
+        self.renderer.display.update({p.name: p.default for p in self.renderer.display})
+
     def apply(self, method: Method, assignments: list[str]) -> None:
         """Apply ``name=value`` strings to the method's or the display's parameters.
 
