@@ -95,7 +95,7 @@ def test_compare_returns_the_table_the_frames_and_an_html_view(studio):
 def test_a_compare_s_values_do_not_leak_into_the_next(studio):
     """A parameter or display value one call sets is gone at the next: its report equals a
     call that never set it (kautz's per_pixel, the exposure)."""
-    args = {"size": (32, 32), "ssaa": 1, "frames": 1, "cache": False}
+    args = {"size": (32, 32), "ssaa": 1, "frames": 1, "cache": False, "trace": False}
     plain = es.compare(studio, ["kautz"], **args).json["methods"]["kautz"]
     es.compare(studio, ["kautz"], per_pixel=True, exposure=2.0, **args)
     after = es.compare(studio, ["kautz"], **args)
