@@ -20,6 +20,7 @@ from envstudio.io.images import write_image
 from envstudio.measure.atlas.entries import write_json
 from envstudio.measure.atlas.grid import AtlasGrid, SceneCell
 from envstudio.measure.atlas.lock import folder_lock
+from envstudio.measure.atlas.page import summary, write_outputs
 from envstudio.measure.atlas.store import AtlasStore
 from envstudio.measure.compare import MAX_SSAA
 
@@ -198,3 +199,16 @@ def test_any_grid_is_refused_in_one_line_or_every_cell_can_be_measured(
         assert 1 <= grid.ssaa <= MAX_SSAA and min(grid.size) >= MIN_SIZE and grid.cameras >= 1
         json.dumps(grid.to_json(), allow_nan=False)
     assert set(tmp_path.iterdir()) == before
+
+
+def test_a_marked_cell_shows_its_mark_and_reason_and_the_summary_counts_it(tmp_path):
+    """Every cell reliable or marked with the reason (issue 40): the matrix's † and hover,
+    the summary's count, the csv's column."""
+    reason = "the reference reached its time limit of 60 s before it converged"
+    marked = {"reliable": False, "unreliable_reason": reason}
+    rows = [measured("mirror"), measured("kautz") | marked]
+    write_outputs(GRID, rows, tmp_path)
+    page = (tmp_path / "index.html").read_text()
+    assert page.count(" †</a>") == 1 and f"† scene error unreliable: {reason}" in page
+    assert {s["method"]: s["marked"] for s in summary(rows)} == {"mirror": 0, "kautz": 1}
+    assert reason in (tmp_path / "atlas.csv").read_text()

@@ -143,6 +143,7 @@ def measure_scene_cell(
                 "psnr_db": _finite(r.metrics.psnr_db),
                 "flip": _finite(r.metrics.flip),
                 "reliable": r.reliable,
+                "unreliable_reason": None if r.reliable else _own_reason(comparison, r),
                 "ms_per_frame": r.frame_ms["median_ms"],
                 "cost_ratio": r.frame_ms["median_ms"] / max(baseline_ms, 1e-9),
                 "gpu_bytes": memory[name],
@@ -153,6 +154,12 @@ def measure_scene_cell(
             }
         )
     return rows
+
+
+def _own_reason(comparison, result) -> str:
+    """Why ``result``'s numbers are marked: its own reference's reason (compare's)."""
+    run = comparison.references.get(result.reference_model or "", comparison.reference)
+    return run.unreliable_reason or "no reference of its reflectance model"
 
 
 def failed_rows(cell: SceneCell, methods: list[str], reason: str) -> list[dict]:

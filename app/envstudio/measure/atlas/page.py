@@ -45,6 +45,7 @@ CSV_COLUMNS = (
     "psnr_db",
     "flip",
     "reliable",
+    "unreliable_reason",
     "ms_per_frame",
     "cost_ratio",
     "gpu_bytes",
@@ -113,6 +114,7 @@ def summary(rows: list[dict]) -> list[dict]:
                 "cells": len(cells),
                 "failed": sum(1 for r in cells if r.get("error")),
                 "skipped": sum(1 for r in cells if r.get("skipped")),
+                "marked": sum(1 for r in good if not r.get("reliable", True)),
                 "median_approximation_error": _median(approx),
                 "worst_approximation_error": max(approx, default=None),
                 "median_scene_error": _median(scene),
@@ -223,7 +225,9 @@ def _matrix(grid: AtlasGrid, rows: list[dict], n: float, kd: float) -> str:
         lines.append(f"<tr><th>{html.escape(method)}</th>{''.join(cells)}</tr>")
     caption = (
         f"N = {n:g}, k_d = {kd:g}: approximation error (median relative, against the untraced "
-        "reference; the traced one where the reference does not trace), median over cameras"
+        "reference; the traced one where the reference does not trace), median over cameras; "
+        "† the scene error is not reliable: its reference's noise can move it by a tenth of "
+        "itself or more (the reason on hover)"
     )
     return (
         f'<p class="caption">{caption}</p><table class="matrix"><tr><th></th>{head}</tr>'
@@ -244,16 +248,22 @@ def _matrix_cell(rows: list[dict]) -> str:
     errors = [error_of(r) for r in rows]
     value = _median([e for e in errors if e is not None])
     first = min(rows, key=lambda r: r["camera"])
-    tip = html.escape(
+    marked = [r for r in rows if not r.get("reliable", True)]
+    tip = (
         f"{_cell_name(first)}: approximation {_percent(first.get('approximation_error'))}, "
         f"scene {_percent(first.get('scene_error'))}, cost × {first['cost_ratio']:.2f}"
     )
+    if marked:
+        reason = marked[0].get("unreliable_reason") or "see the cell's compare.md"
+        tip += f"; † scene error unreliable: {reason}"
+    tip = html.escape(tip)
+    mark = " †" if marked else ""
     images = "".join(
         f'<img src="cells/{html.escape(first[k])}" alt="{k}">' for k in ("image", "heat_map")
     )
     return (
         f'<td style="background:{_colour(value)}" title="{tip}">'
-        f'<a href="cells/{html.escape(first["image"])}">{_percent(value)}</a>'
+        f'<a href="cells/{html.escape(first["image"])}">{_percent(value)}{mark}</a>'
         f'<span class="hover">{images}</span></td>'
     )
 
@@ -314,7 +324,7 @@ def _summary_table(rows: list[dict]) -> str:
         cost = "–" if s["median_cost_ratio"] is None else f"{s['median_cost_ratio']:.2f}"
         lines.append(
             f"<tr><th>{html.escape(s['method'])}</th><td>{s['cells']}</td><td>{s['failed']}</td>"
-            f"<td>{s['skipped']}</td>"
+            f"<td>{s['skipped']}</td><td>{s['marked']}</td>"
             f"<td>{_percent(s['median_approximation_error'])}</td>"
             f"<td>{_percent(s['worst_approximation_error'])}</td>"
             f"<td>{_percent(s['median_scene_error'])}</td>"
@@ -328,6 +338,7 @@ def _summary_table(rows: list[dict]) -> str:
             "cells",
             "failed",
             "input missing",
+            "marked †",
             "approximation error, median",
             "worst",
             "scene error, median",
