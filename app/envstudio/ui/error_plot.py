@@ -254,6 +254,8 @@ def glossiness_section(
         )
         for name in curve.errors:
             xs, ys = measured_points(curve, name)
+            if not len(xs):  # no point (yet, or none: the notes below say why), no legend entry
+                continue
             implot.plot_line(name, xs, ys, implot.Spec(marker=implot.Marker_.circle))
             if implot.is_legend_entry_hovered(name) and imgui.is_mouse_clicked(0):
                 picked = name
