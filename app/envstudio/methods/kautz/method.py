@@ -1,4 +1,4 @@
-"""Method ``kautz``: seed 000 (Kautz, Daubert, Seidel 2003) and past it.
+"""Method ``kautz``: seed 000 (Kautz, Daubert, Seidel 2004) and past it.
 
 One pass draws every reflector with (shaders/kautz/kautz.glsl)
 
@@ -71,7 +71,7 @@ class KautzMethod(Method):
 
     name = "kautz"
     paper = "Kautz, Daubert, Seidel 2004 (seed 000)"
-    title = "Kautz et al. 2003 (SH diffuse + biased mip chain)"
+    title = "Kautz et al. 2004 (SH diffuse + biased mip chain)"
     summary = (
         "Diffuse from SH irradiance, glossy from the box-filtered cube mip chain with LOD "
         "bias b, Schlick Fresnel; dynamic cube capture; cross-face mips; sun extraction."
