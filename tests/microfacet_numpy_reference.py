@@ -25,7 +25,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.core.latlong import texel_directions, uv_to_direction
+from envstudio.core.latlong import direction_to_uv, texel_directions, uv_to_direction
 
 _X, _W = np.polynomial.legendre.leggauss(3)
 
@@ -142,10 +142,13 @@ def ggx_albedo(
     fresnel,
     theta_points: int = 8,
     phi_points: int = 256,
+    radiance: npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.float64]:
     """∫ D G2 F(v·h) / (4 ⟨n, v⟩) dl for each (n, v) (the GGX term under L = 1), (s, 3):
     over half vectors, θ_h in panels graded from α/8 near n to 0.1 rad, ``theta_points``
-    Gauss points each, φ_h at ``phi_points`` midpoints."""
+    Gauss points each, φ_h at ``phi_points`` midpoints. With ``radiance`` (an (h, w, 3)
+    lat-long map), ∫ L(l) ... dl instead, L read at the texel each point's l falls in (for
+    maps smooth at the scale of the points: the sum does not follow texel edges)."""
     edges, step = [0.0], alpha / 8.0
     while edges[-1] + step < 0.5 * math.pi:
         edges.append(edges[-1] + step)
@@ -171,5 +174,16 @@ def ggx_albedo(
         light = 2.0 * v_dot_h[..., None] * h - v
         jacobian = np.where(v_dot_h > 0.0, 4.0 * v_dot_h, 0.0)  # dl = 4 <v, h> dh
         lobe = ggx_lobe(n, v, light, alpha, fresnel) * jacobian[..., None]
+        if radiance is not None:
+            lobe *= _texel_radiance(np.asarray(radiance, dtype=np.float64), light)
         out[k] = np.einsum("tpc,t->c", lobe, theta_weight) * (2.0 * math.pi / phi_points)
     return out
+
+
+def _texel_radiance(radiance: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """The map's texel at each of the (..., 3) unit directions, (..., 3)."""
+    rows, columns = radiance.shape[:2]
+    uv = direction_to_uv(directions.reshape(-1, 3))
+    column = np.minimum((uv[:, 0] * columns).astype(int), columns - 1) % columns
+    row = np.clip((uv[:, 1] * rows).astype(int), 0, rows - 1)
+    return radiance[row, column].reshape(*directions.shape[:-1], 3)

@@ -18,7 +18,10 @@ and across the horizon ⟨n, l⟩ = 0, where G2 has a kink, finer still where th
 steeply from it; for Banks under 1.5 :data:`ACCEPT` times the band's half width inside the
 band and :data:`ACCEPT` times it across its edges, where the lobe has a kink), skipped
 where the lobe is zero over it, refined otherwise, and a texel still refined is cut into
-parts finer than the lobe. What that leaves out is measured, not assumed:
+parts finer than the lobe. A GGX lobe narrower across than a texel's finest part (a grazing
+view of a sharp lobe) has its peak taken over half vectors instead, by a second pass (cells
+of equal GGX probability, each reading its texel), the descent taking the rest. What that
+leaves out is measured, not assumed:
 exact_reference.checked_error holds the result against a plain sum over Gauss points of
 every texel
 (exact_reference.brute_force_radiance, with :func:`microfacet_lobe` and :func:`banks_lobe`),
@@ -244,6 +247,9 @@ def glossy_term(
     stacks = ctx.buffer(reserve=16 * stack_size * chunk)
     tops = ctx.buffer(reserve=4 * chunk)
     shader = programs.compute("reference/exact_lobe.glsl", {"STACK_SIZE": stack_size})
+    peaks = programs.compute(
+        "reference/exact_lobe.glsl", {"STACK_SIZE": stack_size, "PEAK_PASS": 1}
+    )
     for binding, buffer in enumerate([*buffers, stacks, tops]):
         buffer.bind_to_storage_buffer(binding)
     for unit, texture in enumerate(textures.textures):
@@ -262,17 +268,22 @@ def glossy_term(
         "u_self_shadowing": model.self_shadowing,
         "u_budget": BUDGET,
     }
-    for name, value in uniforms.items():
-        set_uniform(shader, name, value)
+    for program in (shader, peaks):
+        for name, value in uniforms.items():
+            set_uniform(program, name, value)
     for first in range(0, count, chunk):
         samples = min(chunk, count - first)
         tops.write(np.full(chunk, -1, np.int32).tobytes())
-        set_uniform(shader, "u_first_sample", first)
-        set_uniform(shader, "u_samples", samples)
+        for program in (shader, peaks):
+            set_uniform(program, "u_first_sample", first)
+            set_uniform(program, "u_samples", samples)
         while True:
             shader.run(group_x=(samples + 63) // 64)
             if not np.frombuffer(tops.read(), np.int32)[:samples].any():
                 break
+        if model.name == "microfacet":  # the peak caps of lobes narrower than a texel's part
+            ctx.memory_barrier()
+            peaks.run(group_x=(samples + 63) // 64)
     out = np.frombuffer(buffers[3].read(), np.float32).reshape(count, 4)[:, :3]
     for buffer in (*buffers, stacks, tops):
         buffer.release()
