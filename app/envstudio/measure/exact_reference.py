@@ -323,9 +323,11 @@ def brute_force_radiance(
             if model.name == "banks":
                 lobe, whole = banks_lobe(model, n[k], v[k], tangents[k], directions[block])
                 norm += whole @ weights[block]
-            else:
-                lobe = microfacet_lobe(model, n[k], v[k], directions[block])
-            total += (lobe * weighted[block]).sum(axis=0)
+                total += np.einsum("pc,pc->c", lobe, weighted[block])
+            else:  # zero below the horizon: the points above it only
+                up = directions[block] @ n[k] > 0.0
+                lobe = microfacet_lobe(model, n[k], v[k], directions[block][up])
+                total += np.einsum("pc,pc->c", lobe, weighted[block][up])
         if model.name == "banks":
             total *= glossy[k] / (norm if model.normalize else 1.0)
         out[k] += total
