@@ -247,9 +247,10 @@ def glossy_term(
     stacks = ctx.buffer(reserve=16 * stack_size * chunk)
     tops = ctx.buffer(reserve=4 * chunk)
     shader = programs.compute("reference/exact_lobe.glsl", {"STACK_SIZE": stack_size})
-    peaks = programs.compute(
-        "reference/exact_lobe.glsl", {"STACK_SIZE": stack_size, "PEAK_PASS": 1}
-    )
+    passes = [shader]
+    if model.name == "microfacet":  # the peak caps of lobes narrower than a texel's part
+        defines = {"STACK_SIZE": stack_size, "PEAK_PASS": 1}
+        passes.append(programs.compute("reference/exact_lobe.glsl", defines))
     for binding, buffer in enumerate([*buffers, stacks, tops]):
         buffer.bind_to_storage_buffer(binding)
     for unit, texture in enumerate(textures.textures):
@@ -268,20 +269,20 @@ def glossy_term(
         "u_self_shadowing": model.self_shadowing,
         "u_budget": BUDGET,
     }
-    for program in (shader, peaks):
+    for program in passes:
         for name, value in uniforms.items():
             set_uniform(program, name, value)
     for first in range(0, count, chunk):
         samples = min(chunk, count - first)
         tops.write(np.full(chunk, -1, np.int32).tobytes())
-        for program in (shader, peaks):
+        for program in passes:
             set_uniform(program, "u_first_sample", first)
             set_uniform(program, "u_samples", samples)
         while True:
             shader.run(group_x=(samples + 63) // 64)
             if not np.frombuffer(tops.read(), np.int32)[:samples].any():
                 break
-        if model.name == "microfacet":  # the peak caps of lobes narrower than a texel's part
+        for peaks in passes[1:]:
             ctx.memory_barrier()
             peaks.run(group_x=(samples + 63) // 64)
     out = np.frombuffer(buffers[3].read(), np.float32).reshape(count, 4)[:, :3]
