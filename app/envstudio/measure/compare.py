@@ -82,7 +82,7 @@ from envstudio.measure.stopping import (
     ReferenceJudge,
     choose_rule,
     median_error,
-    median_error_spread,
+    median_error_uncertainty,
 )
 
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
@@ -638,14 +638,16 @@ def _judge(
     method's median relative error over the mask: the measured difference is
     then the method's, not the reference's noise. The reference compared with
     itself is exact. A control-variate reference, whose noise is known per pixel, is
-    judged by how far that noise can move the method's median error instead
-    (stopping.median_error_spread). The same test as the noise rule's
+    judged by the standard error that noise gives the method's median error instead
+    (stopping.median_error_uncertainty). The same test as the noise rule's
     (measure/stopping.py), on the same numbers when the reference stopped by it.
     """
     result.median_relative_error = median_error(result.hdr, reference.hdr, mask)
     uncertainty = reference.relative_standard_error
     if reference.pixel_noise is not None:
-        uncertainty = median_error_spread(result.hdr, reference.hdr, reference.pixel_noise, mask)
+        uncertainty = median_error_uncertainty(
+            result.hdr, reference.hdr, reference.pixel_noise, mask
+        )
     result.reliable = (
         reference.converged
         or result.name == truth

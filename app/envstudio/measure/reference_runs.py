@@ -105,7 +105,7 @@ class ReferenceRun:
     pixel_noise : (h, w) float32 or None
         A control-variate run's relative standard error per pixel (0 where nothing is
         traced): what its methods' reliability is judged by
-        (stopping.median_error_spread); None otherwise.
+        (stopping.median_error_uncertainty); None otherwise.
     """
 
     parameters: dict[str, object]
@@ -296,7 +296,7 @@ def control_variate(
         traced and untraced estimates differ (where something is traced); 0 where none do.
     pixel_noise : (h, w) float32
         That ratio at every pixel: 0 where nothing is traced, inf where traced and black
-        or where the exact run does not cover the pixel (stopping.median_error_spread
+        or where the exact run does not cover the pixel (stopping.median_error_uncertainty
         judges the methods by it).
     """
     exact, covered = control[0], control[1][..., None]
