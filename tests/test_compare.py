@@ -491,6 +491,28 @@ def test_each_method_is_measured_against_a_reference_of_its_own_reflectance_mode
     assert not (tmp_path / "strict").exists()
 
 
+@pytest.mark.parametrize("self_shadowing", [False, True])
+def test_a_banks_lobe_that_never_meets_the_scene_is_not_traced(
+    small_scene, tmp_path, self_shadowing
+):
+    """Banks without self-shadowing reads the map from every side of the surface and k_d = 0
+    leaves no diffuse term: tracing changes nothing, so the traced reference is the exact one
+    (no samples, scene error = approximation error). With self-shadowing its hemisphere meets
+    the sphere at the rim: sampled, with the exact one as its control variate."""
+    out = tmp_path / f"banks-{self_shadowing}"
+    args = ["--size", "24x24", "--frames", "2", "--warmup", "1", "--methods", "banks"]
+    args += ["--param", "trace=true", "--param", "kd=0"]
+    args += ["--param", f"self_shadowing={str(self_shadowing).lower()}"]
+    assert main(["compare", "--scene", str(small_scene), "--out", str(out), *args]) == 0
+    report = json.loads((out / "compare.json").read_text())
+    reference, banks = report["references"]["banks"], report["methods"]["banks"]
+    if self_shadowing:
+        assert reference["samples"] >= 64 and report["reference"]["stopped_by"] != "exact"
+    else:
+        assert reference["samples"] == 0 and report["reference"]["stopped_by"] == "exact"
+        assert banks["scene_error"] == banks["approximation"]["median_relative_error"]
+
+
 def test_on_a_convex_sphere_the_scene_only_error_is_noise_and_approximation_is_scene(
     small_scene, tmp_path
 ):

@@ -418,7 +418,9 @@ def run_comparison(
     for model, members in groups.items():
         reference.values.update(base)
         reference.values.update(_reference_values(session, reference, model, members, base))
-        traces = SCENE_EFFECTS in reference.values and bool(reference.values[SCENE_EFFECTS])
+        traces = reference.traces_anything()
+        # tracing asked for but changing nothing: the untraced reference is the traced one
+        untraced_is_traced = decompose and not traces and bool(base.get(SCENE_EFFECTS))
         exact = reference_kind == EXACT and model in EXACT_MODELS
         if reference_kind == EXACT and not exact:
             print(
@@ -429,6 +431,8 @@ def run_comparison(
         background = next((rendered[n][2] for n in members if n in rendered), None)
         if exact and not traces:  # the untraced model is the reference: nothing to sample
             runs[model], mask = exact_run(session, reference, size, ssaa, background, cache)
+            if untraced_is_traced:
+                untraced[model] = _as_untraced(runs[model])
             continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
         if exact and traces:  # a control variate: traced = exact untraced + sampled difference
@@ -438,10 +442,7 @@ def run_comparison(
                 session, reference, size, progress, False, judge, control=(known.hdr, known_mask)
             )
             if decompose:
-                untraced[model] = replace(
-                    known,
-                    parameters=runs[model].parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False},
-                )
+                untraced[model] = replace(known, parameters=_as_untraced(runs[model]).parameters)
             continue
         shared = decompose and traces
         if shared:  # the untraced estimate from the same samples
@@ -449,6 +450,8 @@ def run_comparison(
         runs[model], mask = converge(session, reference, size, progress, cache, judge)
         if shared:
             untraced[model] = untraced_run(session, reference, runs[model], mask)
+        elif untraced_is_traced:
+            untraced[model] = _as_untraced(runs[model])
     first = next(iter(runs))
     model_of = {name: model for model, members in groups.items() for name in members}
     model_of[truth] = first
@@ -506,6 +509,11 @@ def run_comparison(
         references=runs,
         untraced=untraced,
     )
+
+
+def _as_untraced(run: ReferenceRun) -> ReferenceRun:
+    """``run`` under the untraced reference's parameters (scene effects off)."""
+    return replace(run, parameters=run.parameters | {SCENE_EFFECTS: False, UNTRACED_TOO: False})
 
 
 def reflectance_groups(names: Sequence[str], base_model: str) -> dict[str, list[str]]:

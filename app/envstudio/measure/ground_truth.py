@@ -176,6 +176,10 @@ class GroundTruth(Protocol):
     def status_line(self) -> str:
         """One line of progress."""
 
+    def traces_anything(self) -> bool:
+        """Whether :data:`SCENE_EFFECTS` can change the estimate with the current values
+        (False: the traced estimate is the untraced one, nothing to sample)."""
+
     def relative_standard_error(self) -> float:
         """Median relative standard error over the reflector (the noise)."""
 

@@ -140,6 +140,17 @@ class ReferenceMethod(Method):
             self._convergence.refresh_noise(self._accumulation.noise)
         return self._convergence.describe()
 
+    def traces_anything(self) -> bool:
+        """Whether tracing can change the estimate with the current values: ``trace`` on, and
+        not the Banks model without self-shadowing and without a diffuse term, whose lobe
+        reads the environment from every side of the surface (accumulate.glsl's
+        ``sample_banks``: such directions are never traced)."""
+        if not self.values["trace"]:
+            return False
+        values = self.values
+        untraced_lobe = values["model"] == "banks" and not values["self_shadowing"]
+        return not (untraced_lobe and not np.any(values["kd"]))
+
     def relative_standard_error(self) -> float:
         """The noise: median relative standard error over the reflector now.
 
