@@ -513,6 +513,36 @@ def test_a_banks_lobe_that_never_meets_the_scene_is_not_traced(
         assert banks["scene_error"] == banks["approximation"]["median_relative_error"]
 
 
+def test_a_method_s_numbers_do_not_depend_on_the_other_models_compared(small_scene, tmp_path):
+    """Each method is measured over its own reference's coverage: mirror's numbers beside banks
+    (an exact reference, whose coverage is the footprint grid's) are those of mirror alone
+    (a control variate's, the traced samples'), not over the last reference's pixels."""
+    args = ["--size", "24x24", "--frames", "2", "--warmup", "1", "--param", "trace=true"]
+    args += ["--param", "kd=0"]
+    numbers = []
+    for methods in ("mirror", "mirror,banks"):
+        out = tmp_path / methods.replace(",", "-")
+        assert (
+            main(
+                [
+                    "compare",
+                    "--scene",
+                    str(small_scene),
+                    "--out",
+                    str(out),
+                    *args,
+                    "--methods",
+                    methods,
+                ]
+            )
+            == 0
+        )
+        report = json.loads((out / "compare.json").read_text())
+        mirror = report["methods"]["mirror"]
+        numbers.append((mirror["approximation"]["median_relative_error"], report["mask_pixels"]))
+    assert numbers[0] == numbers[1]
+
+
 def test_on_a_convex_sphere_the_scene_only_error_is_noise_and_approximation_is_scene(
     small_scene, tmp_path
 ):

@@ -16,7 +16,16 @@ import pytest
 from envstudio.cli import main
 from envstudio.core.env_sampling import LUMINANCE
 from envstudio.core.metrics import relative_error
-from envstudio.measure.stopping import NOISE_SHARE, Judgement, median_error_uncertainty
+from envstudio.measure.compare import MethodResult, _judge
+from envstudio.measure.exact_reference import CheckedError
+from envstudio.measure.ground_truth import ConvergenceStatus
+from envstudio.measure.reference_runs import ReferenceRun
+from envstudio.measure.stopping import (
+    NOISE_SHARE,
+    Judgement,
+    control_variate_uncertainty,
+    median_error_uncertainty,
+)
 from scene_files import ball_scene
 from test_exact_reference import spot_map
 
@@ -99,6 +108,20 @@ def test_a_tenth_of_unknown_pixels_moves_the_median_by_their_imbalance(errors):
     assert uncertainty == pytest.approx(np.hypot(imbalance, offset), rel=0.15)
 
 
+def test_a_drift_since_half_the_samples_counts_where_the_noise_reads_zero(errors):
+    """Nothing noisy (every pixel's noise 0, as where a rarely cut lobe has traced nothing
+    yet): the estimate of half the samples 2 % brighter moves the median error by about 2 %
+    of its 1.1: that drift is the uncertainty; none before there is a half (inf)."""
+    method, reference, mask = frames_with_errors(errors)
+    quiet = np.zeros(errors.shape)
+    assert control_variate_uncertainty(method, reference, quiet, mask, reference) == 0.0
+    half = 1.02 * reference
+    drift = np.median(errors) - np.median(np.abs(1.0 + errors - 1.02) / 1.02)
+    uncertainty = control_variate_uncertainty(method, reference, quiet, mask, half)
+    assert uncertainty == pytest.approx(abs(drift), rel=0.01) and uncertainty > 0.015
+    assert control_variate_uncertainty(method, reference, quiet, mask, None) == np.inf
+
+
 def test_the_judgement_takes_each_method_s_uncertainty_over_the_median_noise():
     """A control variate's median noise where it traces (2 %) would mark both methods; their
     uncertainties mark only the one whose median's standard error is a tenth of its error."""
@@ -131,3 +154,31 @@ def test_compare_of_a_traced_sphere_stops_though_its_rim_is_noisier_than_a_tenth
     assert reference["stopped_by"] == "reliable" and report["reliable"]
     hwconv = report["methods"]["hwconv"]["median_relative_error"]
     assert reference["relative_standard_error"] > NOISE_SHARE * hwconv
+
+
+@pytest.mark.parametrize(("checked", "reliable"), [(0.001, True), (0.02, False)])
+def test_a_control_variate_s_exact_bound_marks_a_method_its_noise_would_not(
+    errors, checked, reliable
+):
+    """Nothing left to sample (no pixel noise) leaves the exact part's checked error: a
+    method whose median error (0.1 here) is under ten times it is marked, with that reason."""
+    method, reference, mask = frames_with_errors(errors)
+    run = ReferenceRun(
+        parameters={"time_limit": 60.0, "max_samples": 8192},
+        status=ConvergenceStatus(),
+        frames_ms=[1.0],
+        total_s=0.001,
+        relative_standard_error=0.0,
+        resumed_samples=0,
+        hdr=reference,
+        display=reference,
+        stopping_rule="noise",
+        stopped_by="reliable",
+        exact_error=CheckedError(checked, 2 * checked, 12),
+        control_variate=True,
+        pixel_noise=np.zeros(errors.shape, np.float32),
+        half_hdr=reference,
+    )
+    result = MethodResult("m", {}, {}, None, None, None, {}, "", method, method)
+    assert _judge(result, run, mask, "reference").reliable is reliable
+    assert run.unreliable_reason.startswith("the exact reference's checked error (median")

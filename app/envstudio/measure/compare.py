@@ -81,8 +81,8 @@ from envstudio.measure.stopping import (
     NOISE_SHARE,
     ReferenceJudge,
     choose_rule,
+    control_variate_uncertainty,
     median_error,
-    median_error_uncertainty,
 )
 
 MATCHED_NAMES = ("model", "fresnel", "kd", "phong_exponent", "lod_bias")
@@ -415,6 +415,7 @@ def run_comparison(
     base = dict(reference.values.as_dict())
     runs: dict[str, ReferenceRun] = {}
     untraced: dict[str, ReferenceRun] = {}
+    masks: dict[str, npt.NDArray[np.bool_]] = {}  # each reference's coverage: its methods'
     for model, members in groups.items():
         reference.values.update(base)
         reference.values.update(_reference_values(session, reference, model, members, base))
@@ -430,7 +431,7 @@ def run_comparison(
             )
         background = next((rendered[n][2] for n in members if n in rendered), None)
         if exact and not traces:  # the untraced model is the reference: nothing to sample
-            runs[model], mask = exact_run(session, reference, size, ssaa, background, cache)
+            runs[model], masks[model] = exact_run(session, reference, size, ssaa, background, cache)
             if untraced_is_traced:
                 untraced[model] = _as_untraced(runs[model])
             continue
@@ -438,18 +439,19 @@ def run_comparison(
         if exact and traces:  # a control variate: traced = exact untraced + sampled difference
             known, known_mask = exact_run(session, reference, size, ssaa, background, cache)
             reference.values[UNTRACED_TOO] = True
-            runs[model], mask = converge(
+            runs[model], masks[model] = converge(
                 session, reference, size, progress, False, judge, control=(known.hdr, known_mask)
             )
+            runs[model] = replace(runs[model], exact_error=known.exact_error)
             if decompose:
                 untraced[model] = replace(known, parameters=_as_untraced(runs[model]).parameters)
             continue
         shared = decompose and traces
         if shared:  # the untraced estimate from the same samples
             reference.values[UNTRACED_TOO] = True
-        runs[model], mask = converge(session, reference, size, progress, cache, judge)
+        runs[model], masks[model] = converge(session, reference, size, progress, cache, judge)
         if shared:
-            untraced[model] = untraced_run(session, reference, runs[model], mask)
+            untraced[model] = untraced_run(session, reference, runs[model], masks[model])
         elif untraced_is_traced:
             untraced[model] = _as_untraced(runs[model])
     first = next(iter(runs))
@@ -467,6 +469,7 @@ def run_comparison(
     results = []
     for name, (method, glossiness, hdr, display) in frames_of.items():
         own = runs.get(model_of.get(name, ""))
+        mask = masks.get(model_of.get(name, ""), masks[first])
         result = MethodResult(
             name=name,
             parameters=method.values.as_dict(),
@@ -501,7 +504,7 @@ def run_comparison(
         camera=(camera.azimuth, camera.elevation, camera.distance),
         display=session.renderer.display.as_dict(),
         device=describe(session.ctx),
-        mask=mask,
+        mask=masks[first],
         reference=ref_run,
         results=results,
         extras=extras,
@@ -646,16 +649,20 @@ def _judge(
     method's median relative error over the mask: the measured difference is
     then the method's, not the reference's noise. The reference compared with
     itself is exact. A control-variate reference, whose noise is known per pixel, is
-    judged by the standard error that noise gives the method's median error instead
-    (stopping.median_error_uncertainty). The same test as the noise rule's
-    (measure/stopping.py), on the same numbers when the reference stopped by it.
+    judged by the standard error that noise gives the method's median error and its drift
+    since half the samples instead (stopping.control_variate_uncertainty), and by its exact
+    part's checked error. The same
+    test as the noise rule's (measure/stopping.py), on the same numbers when the reference
+    stopped by it.
     """
     result.median_relative_error = median_error(result.hdr, reference.hdr, mask)
     uncertainty = reference.relative_standard_error
-    if reference.pixel_noise is not None:
-        uncertainty = median_error_uncertainty(
-            result.hdr, reference.hdr, reference.pixel_noise, mask
+    if reference.pixel_noise is not None:  # the noise left, and the exact part's bound
+        uncertainty = control_variate_uncertainty(
+            result.hdr, reference.hdr, reference.pixel_noise, mask, reference.half_hdr
         )
+        if reference.exact_error is not None:
+            uncertainty = max(uncertainty, reference.exact_error.median)
     result.reliable = (
         reference.converged
         or result.name == truth

@@ -97,7 +97,9 @@ class ReferenceRun:
     exact_error : CheckedError or None
         For an exact run (measure/exact_reference.py), its checked relative error against
         the brute force, median and largest (``relative_standard_error`` holds the median:
-        what the methods' reliability is judged by); None for a Monte Carlo run.
+        what the methods' reliability is judged by); for a control-variate run, that of its
+        exact part (a method is reliable when both it and the noise are under a tenth of its
+        error); None for a plain Monte Carlo run.
     control_variate : bool
         A traced run estimated as the exact untraced reference plus the sampled difference
         traced − untraced (:func:`control_variate`): ``hdr`` and the noise are that
@@ -105,7 +107,10 @@ class ReferenceRun:
     pixel_noise : (h, w) float32 or None
         A control-variate run's relative standard error per pixel (0 where nothing is
         traced): what its methods' reliability is judged by
-        (stopping.median_error_uncertainty); None otherwise.
+        (stopping.control_variate_uncertainty); None otherwise.
+    half_hdr : (h, w, 3) float32 or None
+        A control-variate run's estimate of at most half its samples (the drift of its
+        methods' errors since then is judged too); None otherwise.
     """
 
     parameters: dict[str, object]
@@ -122,6 +127,7 @@ class ReferenceRun:
     exact_error: CheckedError | None = None
     control_variate: bool = False
     pixel_noise: npt.NDArray[np.float32] | None = None
+    half_hdr: npt.NDArray[np.float32] | None = None
 
     @property
     def converged(self) -> bool:
@@ -133,6 +139,8 @@ class ReferenceRun:
         """Why marked metrics cannot be trusted, or None when the reference converged."""
         if self.converged:
             return None
+        if self.pixel_noise is not None and self.stopped_by == "reliable":
+            return self._bound_text()  # the noise was judged enough: the bound was not
         if self.pixel_noise is not None:
             return (
                 f"{self._stop_text()} and the control variate's noise where it traces (median "
@@ -140,12 +148,7 @@ class ReferenceRun:
                 f"median relative error by {NOISE_SHARE:g} of it or more ({self._advice()})"
             )
         if self.exact_error is not None:
-            checked = self.exact_error
-            return (
-                f"the exact reference's checked error (median {100 * checked.median:.3g} %, "
-                f"largest {100 * checked.largest:.3g} % against the brute force) is not below "
-                f"{NOISE_SHARE:g} of the marked methods' median relative error"
-            )
+            return self._bound_text()
         # batches of one Sobol sequence are negatively correlated: their spread overstates
         bound = (
             ", an upper bound under sequence=sobol"
@@ -157,6 +160,15 @@ class ReferenceRun:
             f"({100 * self.relative_standard_error:.3g} %{bound}) is not below "
             f"{NOISE_SHARE:g} of the marked methods' median relative error, so its Monte Carlo "
             f"noise is part of their metrics ({self._advice()})"
+        )
+
+    def _bound_text(self) -> str:
+        """The exact reference's checked error is what marks the methods."""
+        checked = self.exact_error
+        return (
+            f"the exact reference's checked error (median {100 * checked.median:.3g} %, "
+            f"largest {100 * checked.largest:.3g} % against the brute force) is not below "
+            f"{NOISE_SHARE:g} of the marked methods' median relative error"
         )
 
     def _stop_text(self) -> str:
@@ -221,13 +233,17 @@ def converge(
     ):
         frames_ms.append(timed_frame(session, reference, size))
         mask = reflector_mask(session, reference)
+        kept = KeptEstimates()
         while True:
             if judge.due(reference.status.batches):
                 if control is None:
                     judge.judge(reference, session.read_hdr(), mask)
                 else:
                     hdr, _, noise, pixel_noise = control_variate(session, reference, control, mask)
-                    judge.judge(reference, hdr, mask, noise, pixel_noise)
+                    batches = reference.status.batches
+                    half = kept.half(batches)
+                    kept.keep(batches, hdr)
+                    judge.judge(reference, hdr, mask, noise, pixel_noise, half)
             if progress:
                 bar.set_postfix_str(progress_line(reference, judge), refresh=False)
                 bar.update()
@@ -244,11 +260,12 @@ def converge(
     if resumed:
         print(f"reference: resumed at {resumed} spp from {checkpoint.path}", file=sys.stderr)
     stopped_by = "reliable" if judge.satisfied() else reference.stop_reason()
-    pixel_noise = None
+    pixel_noise = half = None
     if control is None:
         hdr, noise = session.read_hdr(), reference.relative_standard_error()
     else:
         hdr, _, noise, pixel_noise = control_variate(session, reference, control, mask)
+        half = kept.half(reference.status.batches)
     print(f"reference: {stop_line(reference, noise, wall_s, stopped_by)}", file=sys.stderr)
     run = ReferenceRun(
         parameters=reference.values.as_dict(),
@@ -264,8 +281,33 @@ def converge(
         wall_s=wall_s,
         control_variate=control is not None,
         pixel_noise=pixel_noise,
+        half_hdr=half,
     )
     return run, mask
+
+
+class KeptEstimates:
+    """A control variate's estimates at the batch counts it was judged at, for the estimate
+    of half the samples (stopping.control_variate_uncertainty); the accumulation is
+    cumulative, so the estimate at b batches is that of the first b batches' samples."""
+
+    def __init__(self) -> None:
+        self._by_batches: dict[int, npt.NDArray[np.float32]] = {}
+
+    def keep(self, batches: int, hdr: npt.NDArray[np.float32]) -> None:
+        self._by_batches[batches] = hdr
+
+    def half(self, batches: int) -> npt.NDArray[np.float32] | None:
+        """The latest estimate of at most half of ``batches`` (None: none yet); earlier ones,
+        which no later count asks for, are dropped."""
+        earlier = [b for b in self._by_batches if b <= batches // 2]
+        if not earlier:
+            return None
+        latest = max(earlier)
+        for b in earlier:
+            if b < latest:
+                del self._by_batches[b]
+        return self._by_batches[latest]
 
 
 def control_variate(

@@ -450,6 +450,14 @@ def _reference_line(comparison: Comparison) -> str:
 def _run_line(ref: ReferenceRun) -> str:
     """Samples and time, the stopping rule and what stopped it, the noise, the half-change;
     for an exact run, its time and its checked error."""
+    if ref.control_variate:
+        return (
+            f"control variate: traced, less β × (its untraced estimate − the exact one), "
+            f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s); "
+            f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: "
+            f"{STOPPED_BY[ref.stopped_by]}; noise (median relative standard error) "
+            f"{_percent(ref.relative_standard_error)}"
+        )
     if ref.exact_error is not None:
         checked = ref.exact_error
         return (
@@ -459,14 +467,6 @@ def _run_line(ref: ReferenceRun) -> str:
         )
     change = ref.status.rms_change
     state = "converged" if ref.converged else "NOT converged"
-    if ref.control_variate:
-        return (
-            f"control variate: traced, less β × (its untraced estimate − the exact one), "
-            f"{ref.status.samples} spp in {len(ref.frames_ms)} frames ({ref.total_s:.1f} s); "
-            f"stopping rule: {_rule_text(ref.stopping_rule)}; stopped: "
-            f"{STOPPED_BY[ref.stopped_by]}; noise (median relative standard error) "
-            f"{_percent(ref.relative_standard_error)}"
-        )
     half = "no half-change yet" if change is None else f"half-change {100 * change:.3g} %"
     limit = float(ref.parameters.get("time_limit", 0.0))
     budget = f"budget {ref.parameters['max_samples']} spp" + (

@@ -22,8 +22,9 @@ Two rules:
 With a control-variate reference (measure/reference_runs.control_variate) the noise is
 zero wherever nothing is traced, so one median over the reflector would hide the pixels
 still sampled and one over those alone would ask more than the metric needs: each method's
-uncertainty is then :func:`median_error_uncertainty`, the standard error of its median
-error when every pixel of the reference moves by its own noise, independently, and the rule
+uncertainty is then :func:`control_variate_uncertainty`: the standard error of its median
+error when every pixel of the reference moves by its own noise, independently, with the
+median error's drift since half the samples (a bias the noise does not show), and the rule
 holds when that is under :data:`NOISE_SHARE` of its error. On a convex reflector without
 local objects it is zero at once: nothing is left to sample.
 
@@ -79,7 +80,7 @@ class Judgement:
     errors : dict
         Method name → median relative luminance error against the reference.
     uncertainties : dict or None
-        Method name → :func:`median_error_uncertainty` of its error, where the reference's
+        Method name → :func:`control_variate_uncertainty` of its error, where the reference's
         noise is known per pixel (a control variate's); None: ``noise`` stands for every
         method.
     """
@@ -217,6 +218,42 @@ def median_error_uncertainty(
     return float(np.sqrt(np.mean((medians - observed) ** 2)))
 
 
+def control_variate_uncertainty(
+    hdr: npt.NDArray[np.float32],
+    reference_hdr: npt.NDArray[np.float32],
+    pixel_noise: npt.NDArray,
+    mask: npt.NDArray,
+    half_hdr: npt.NDArray[np.float32] | None,
+) -> float:
+    """What a control-variate reference leaves uncertain in a method's median error: the
+    standard error its noise gives it (:func:`median_error_uncertainty`) and its drift since
+    the estimate of half the samples, combined in quadrature.
+
+    The drift is what the noise does not show: a pixel whose lobe the scene cuts rarely has
+    traced nothing yet, so its difference and its noise read zero, and the estimate is off
+    there until a sample finds the cut. Such a bias falls as 1 / samples, so the change of the
+    median error since half the samples is about what is left of it (and more, with the
+    half's noise in it).
+
+    Parameters
+    ----------
+    hdr, reference_hdr, pixel_noise, mask
+        As :func:`median_error_uncertainty`.
+    half_hdr : (h, w, 3) float32 or None
+        The control-variate estimate from the first half of the samples (or fewer); None
+        before there is one (the drift is then unknown: inf).
+
+    Returns
+    -------
+    float
+        Unitless, ≥ 0.
+    """
+    if half_hdr is None:
+        return math.inf
+    drift = median_error(hdr, reference_hdr, mask) - median_error(hdr, half_hdr, mask)
+    return float(math.hypot(median_error_uncertainty(hdr, reference_hdr, pixel_noise, mask), drift))
+
+
 class ReferenceJudge:
     """Judges the methods' errors against the reference as it accumulates.
 
@@ -259,16 +296,18 @@ class ReferenceJudge:
         mask: npt.NDArray[np.bool_],
         noise: float | None = None,
         pixel_noise: npt.NDArray | None = None,
+        half_hdr: npt.NDArray[np.float32] | None = None,
     ) -> Judgement:
         """Measure the noise and every method's error against ``reference_hdr`` over ``mask``;
         ``noise``, when given, is the noise of ``reference_hdr`` (a control-variate estimate's),
         else the reference's own; ``pixel_noise`` (h, w), when given, its relative standard
-        error per pixel, which each method's :func:`median_error_uncertainty` is judged by."""
+        error per pixel and ``half_hdr`` the estimate of half its samples, which each method's
+        :func:`control_variate_uncertainty` is judged by."""
         status = reference.status
         uncertainties = None
         if pixel_noise is not None:
             uncertainties = {
-                name: median_error_uncertainty(hdr, reference_hdr, pixel_noise, mask)
+                name: control_variate_uncertainty(hdr, reference_hdr, pixel_noise, mask, half_hdr)
                 for name, hdr in self.frames.items()
             }
         judgement = Judgement(
