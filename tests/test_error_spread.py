@@ -21,6 +21,7 @@ from envstudio.measure.exact_reference import CheckedError
 from envstudio.measure.ground_truth import ConvergenceStatus
 from envstudio.measure.reference_runs import ReferenceRun
 from envstudio.measure.stopping import (
+    CONFIDENCE,
     NOISE_SHARE,
     Judgement,
     control_variate_uncertainty,
@@ -111,14 +112,16 @@ def test_a_tenth_of_unknown_pixels_moves_the_median_by_their_imbalance(errors):
 def test_a_drift_since_half_the_samples_counts_where_the_noise_reads_zero(errors):
     """Nothing noisy (every pixel's noise 0, as where a rarely cut lobe has traced nothing
     yet): the estimate of half the samples 2 % brighter moves the median error by about 2 %
-    of its 1.1: that drift is the uncertainty; none before there is a half (inf)."""
+    of its 1.1: that drift, counted CONFIDENCE times, is the uncertainty; none before there is
+    a half (inf)."""
     method, reference, mask = frames_with_errors(errors)
     quiet = np.zeros(errors.shape)
     assert control_variate_uncertainty(method, reference, quiet, mask, reference) == 0.0
     half = 1.02 * reference
     drift = np.median(errors) - np.median(np.abs(1.0 + errors - 1.02) / 1.02)
     uncertainty = control_variate_uncertainty(method, reference, quiet, mask, half)
-    assert uncertainty == pytest.approx(abs(drift), rel=0.01) and uncertainty > 0.015
+    assert uncertainty == pytest.approx(CONFIDENCE * abs(drift), rel=0.01)
+    assert CONFIDENCE == 2.0 and abs(drift) > 0.015
     assert control_variate_uncertainty(method, reference, quiet, mask, None) == np.inf
 
 
