@@ -1,7 +1,7 @@
-"""The atlas measured again against the record before it: how far each cell moved.
+"""An atlas measured again against the record: how far each cell moved.
 
-    python studies/atlas-full/against_before.py studies/atlas-full/atlas-before.csv \
-        studies/atlas-full/atlas.csv
+    python studies/atlas-full/against_before.py studies/atlas-full/atlas.csv \
+        studies/atlas-full/atlas-bootstrap-rule.csv
 
 Both are atlas.csv files of the same grid. For the cells measured in both: the largest change
 of the approximation column (the exact references: none expected), and per mesh the median and
