@@ -649,9 +649,8 @@ def _judge(
     method's median relative error over the mask: the measured difference is
     then the method's, not the reference's noise. The reference compared with
     itself is exact. A control-variate reference, whose noise is known per pixel, is
-    judged by the standard error that noise gives the method's median error and its drift
-    since half the samples instead (stopping.control_variate_uncertainty), and by its exact
-    part's checked error. The same
+    judged by the uncertainty that noise leaves in the method's median error instead
+    (stopping.control_variate_uncertainty), and by its exact part's checked error. The same
     test as the noise rule's (measure/stopping.py), on the same numbers when the reference
     stopped by it.
     """

@@ -338,7 +338,7 @@ def control_variate(
         traced and untraced estimates differ (where something is traced); 0 where none do.
     pixel_noise : (h, w) float32
         That ratio at every pixel: 0 where nothing is traced, inf where traced and black
-        or where the exact run does not cover the pixel (stopping.median_error_uncertainty
+        or where the exact run does not cover the pixel (stopping.control_variate_uncertainty
         judges the methods by it).
     """
     exact, covered = control[0], control[1][..., None]

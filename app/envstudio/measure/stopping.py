@@ -197,18 +197,16 @@ def median_error_uncertainty(
     float
         Unitless, ≥ 0.
     """
-    y_method = (np.asarray(hdr, dtype=np.float64) @ LUMINANCE)[mask]
-    y_reference = (np.asarray(reference_hdr, dtype=np.float64) @ LUMINANCE)[mask]
     sigma = np.asarray(pixel_noise, dtype=np.float64)[mask]
-    observed = np.median(np.abs(y_method - y_reference) / np.maximum(y_reference, RELATIVE_FLOOR))
     noisy = sigma > 0
     if not noisy.any():
         return 0.0
+    error = relative_error(hdr, reference_hdr)[mask].astype(np.float64)
+    observed, exact = np.median(error), error[~noisy]
+    y_method = (np.asarray(hdr, dtype=np.float64) @ LUMINANCE)[mask]
+    y_reference = (np.asarray(reference_hdr, dtype=np.float64) @ LUMINANCE)[mask]
     rng = np.random.default_rng(UNCERTAINTY_SEED)
     known = np.isfinite(sigma[noisy])
-    exact = np.abs(y_method[~noisy] - y_reference[~noisy]) / np.maximum(
-        y_reference[~noisy], RELATIVE_FLOOR
-    )
     medians = []
     for first in range(0, draws, DRAWS_AT_ONCE):
         z = rng.standard_normal((min(DRAWS_AT_ONCE, draws - first), int(noisy.sum())))
