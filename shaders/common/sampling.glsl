@@ -12,6 +12,9 @@ mat3 frame_around(vec3 axis) {
     return mat3(t, cross(axis, t), axis);
 }
 
+// The balance heuristic's weight (Veach 1995) of a technique of density a against one of b.
+float balance(float a, float b) { return a / max(a + b, 1e-30); }
+
 // Cosine-weighted hemisphere about n: pdf = max(n.l, 0) / pi.
 vec3 sample_cosine(vec3 n, vec2 xi) {
     float r = sqrt(xi.x);

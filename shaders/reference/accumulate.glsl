@@ -105,8 +105,6 @@ vec3 incident_weighted(vec3 p, vec3 n, vec3 l, vec3 weight) {
     return weight * incident(p, n, l);
 }
 
-float balance(float a, float b) { return a / max(a + b, 1e-30); }
-
 // One MIS sample pair for D (cosine lobe) and P (Phong lobe): four directions
 // with their weights, then one loop that traces them (a single call site of
 // incident(), so the traversal is compiled once).

@@ -16,6 +16,15 @@
 // u_trace_bounces hits, then black, so self-reflections see the room and not
 // the environment behind its walls. The bound is a uniform so that no
 // compiler unrolls the loop into one copy of the traversal per bounce.
+//
+// At each reflector hit whose continuation is traced, the environment is also
+// sampled (next-event estimation): one direction drawn from the luminance tables,
+// traced as a shadow ray and weighted against the BRDF's continuation by the
+// balance heuristic (Veach 1995), as the first hit pairs its samples
+// (accumulate.glsl). Without it a self-reflection of a small bright lamp is
+// found only when the continuation happens to hit the lamp: a N = 10 knot under
+// studio.exr then kept 47 % of parallax's error as noise after 2640 spp.
+// Shadow rays and path rays take turns through the one trace_closest() call.
 #include "common/sh.glsl"
 
 uniform vec3 u_sh9[9];
@@ -41,18 +50,39 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
     vec3 origin = p + n * u_ray_offset;
     vec3 direction = l;
     vec3 throughput = vec3(1.0);
-    for (int bounce = 0; bounce < u_trace_bounces; ++bounce) {
+    vec3 radiance = vec3(0.0);
+    // the density the last reflector hit drew `direction` with (0: the first ray, or a
+    // mirror, which no environment sample can draw)
+    float lobe_pdf = 0.0;
+    // the pending environment sample of the last hit: its direction and weight
+    vec3 shadow_direction = vec3(0.0);
+    vec3 shadow_weight = vec3(0.0);
+    bool continues = true;
+    int rays = 0;
+    for (int step = 0; step < 2 * u_trace_bounces; ++step) {
+        bool shadow = any(greaterThan(shadow_weight, vec3(0.0)));
+        vec3 ray = shadow ? shadow_direction : direction;
         float t;
         int tri;
         vec2 uv;
-        if (!trace_closest(origin, direction, t, tri, uv)) {
-            return throughput * environment_radiance(direction);
+        bool hit = trace_closest(origin, ray, t, tri, uv);
+        if (shadow) {
+            if (!hit) radiance += shadow_weight * environment_radiance(ray);
+            shadow_weight = vec3(0.0);
+            if (!continues) return radiance;
+            continue;
+        }
+        ++rays;
+        if (!hit) {
+            float w = lobe_pdf > 0.0 ? balance(lobe_pdf, env_pdf(direction)) : 1.0;
+            return radiance + throughput * w * environment_radiance(direction);
         }
         vec3 hit_normal = hit_shading_normal(tri, uv);
         vec4 info = trace_triangles[7 * tri + 6];
         if (info.a < 0.5) {
             if (dot(hit_normal, direction) > 0.0) hit_normal = -hit_normal;
-            return throughput * info.rgb / PI * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
+            return radiance
+                   + throughput * info.rgb / PI * max(sh9_irradiance(u_sh9, hit_normal), vec3(0.0));
         }
         // a reflector: the side of the face the path arrives at, as at the first hit
         vec3 face = hit_face_normal(tri);
@@ -60,17 +90,29 @@ vec3 traced_radiance(vec3 p, vec3 n, vec3 l) {
             face = -face;
             hit_normal = -hit_normal;
         }
-        if (dot(hit_normal, direction) >= 0.0) return vec3(0.0);
+        // the last hit a path may have: its continuation would not be traced (black)
+        if (dot(hit_normal, direction) >= 0.0 || rays == u_trace_bounces) return radiance;
         vec3 weight;
-        vec3 next = sample_reflector(direction, hit_normal, path_random3(), weight);
+        vec3 next = sample_reflector(direction, hit_normal, path_random3(), weight, lobe_pdf);
+        if (lobe_pdf > 0.0) {
+            // next-event estimation; the surface blocks what lies below it, as at the first hit
+            vec3 toward = sample_environment(path_random3().xy);
+            float environment = env_pdf(toward);
+            float response_pdf;
+            vec3 response = reflector_response(direction, hit_normal, toward, response_pdf);
+            if (environment > 0.0 && dot(toward, face) > 0.0) {
+                shadow_direction = toward;
+                shadow_weight = throughput * response / environment
+                                * balance(environment, response_pdf);
+            }
+        }
         // the surface blocks what the lobe reaches below it, as at the first hit
         bool none = all(lessThanEqual(weight, vec3(0.0)));
-        if (none || dot(next, hit_normal) <= 0.0 || dot(next, face) <= 0.0) {
-            return vec3(0.0);
-        }
+        continues = !(none || dot(next, hit_normal) <= 0.0 || dot(next, face) <= 0.0);
+        if (!continues && all(lessThanEqual(shadow_weight, vec3(0.0)))) return radiance;
         throughput *= weight;
         origin = origin + t * direction + hit_normal * u_ray_offset;
         direction = next;
     }
-    return vec3(0.0);
+    return radiance;
 }
