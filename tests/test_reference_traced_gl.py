@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from envstudio.core.latlong import texel_directions
 from envstudio.engine.session import RenderSession
 from envstudio.io.meshes import load_mesh
 from envstudio.resources import asset_root
@@ -26,7 +27,7 @@ from envstudio.scene.camera import OrbitCamera
 from envstudio.scene.environment import Environment
 from envstudio.scene.graph import Node, Scene
 from envstudio.scene.mesh import MeshData
-from envstudio.scene.primitives import uv_sphere
+from envstudio.scene.primitives import torus_knot, uv_sphere
 from test_reference_gl import bright_patch
 
 SIZE = (32, 32)
@@ -140,3 +141,40 @@ def test_the_untraced_estimate_of_a_traced_run_is_the_untraced_run(gl_ctx, mater
     assert cover.sum() > 200
     np.testing.assert_allclose(shared[cover], untraced[cover], rtol=1e-4, atol=1e-6)
     assert not np.allclose(traced[cover], untraced[cover], rtol=1e-3)  # the bunny occludes
+
+
+def sun_map(height: int = 32) -> np.ndarray:
+    """(h, 2h, 3) a sky of 0.2 with a sun of 200 over 4 texels: two thirds of the map's
+    luminance in a few thousandths of its solid angle."""
+    d = texel_directions(height)
+    sky = np.full((height, 2 * height, 3), 0.2, np.float32)
+    towards = np.array([0.3, 0.8, 0.5]) / np.linalg.norm([0.3, 0.8, 0.5])
+    sky[np.sum((d - towards) ** 2, -1) < 0.01] = 200.0
+    return sky
+
+
+@pytest.mark.parametrize("model", ["phong", "microfacet"])
+def test_self_reflections_of_a_small_sun_are_sampled_at_every_hit(gl_ctx, model):
+    """The knot reflecting itself under a small sun, N = 10: a path that meets the knot again
+    samples the map there too (paths.glsl's next-event estimation), so the sun's reflection in
+    the knot is found at most hits, not only by the rare continuation that reaches it. The
+    difference traced − untraced (what a control variate leaves to sample) has an RMS standard
+    error over the knot of 0.031 (phong) and 0.029 (microfacet) after 16 × 16 samples; without
+    the environment samples at the hits it was 0.17 and 0.26 (dominated by the few pixels
+    whose continuations had hit the sun)."""
+    camera = OrbitCamera(azimuth=30.0, elevation=25.0, distance=2.6, fov_y=45.0)
+    scene = Scene(Environment(sun_map()), [Node("knot", torus_knot().fitted(1.0))], camera, "k")
+    session = RenderSession(scene, ctx=gl_ctx, cube_size=16)
+    method = session.method("reference")
+    method.values.update(
+        {"model": model, "kd": 0.0, "fresnel": 1.0, "phong_exponent": 10.0, "trace": True}
+    )
+    method.values.update({"pixel_filter": False, "untraced_too": True, "sequence": "random"})
+    method.values.update({"adaptive": False, "samples": 16, "max_samples": 10**6})
+    session.renderer.display["background"] = False
+    for _ in range(16):
+        session.render_offscreen(method, SIZE)
+    paired, covered = method.paired(), method.coverage()
+    session.release()
+    difference = paired.difference_error.astype(np.float64).mean(axis=-1)[covered]
+    assert np.sqrt(np.mean(difference**2)) < 0.08

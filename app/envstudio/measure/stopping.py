@@ -22,10 +22,9 @@ Two rules:
 With a control-variate reference (measure/reference_runs.control_variate) the noise is
 zero wherever nothing is traced, so one median over the reflector would hide the pixels
 still sampled and one over those alone would ask more than the metric needs: each method's
-uncertainty is then :func:`control_variate_uncertainty`: how far its median error moves when
-every pixel of the reference moves by its own noise at once, or twice the standard error of
-the median with its drift since half the samples (a bias the noise does not show) where that
-is larger, and the rule holds when that is under :data:`NOISE_SHARE` of its error. On a
+uncertainty is then :func:`control_variate_uncertainty`: twice the standard error of the
+median with its drift since half the samples (a bias the noise does not show), and the rule
+holds when that is under :data:`NOISE_SHARE` of its error. On a
 convex reflector without local objects it is zero at once: nothing is left to sample.
 
 Under either rule the reference also stops on its sample budget
@@ -219,42 +218,6 @@ def median_error_uncertainty(
     return float(np.sqrt(np.mean((medians - observed) ** 2)))
 
 
-def median_error_spread(
-    hdr: npt.NDArray[np.float32],
-    reference_hdr: npt.NDArray[np.float32],
-    pixel_noise: npt.NDArray,
-    mask: npt.NDArray,
-) -> float:
-    """Half the range of :func:`median_error` when each reference pixel moves by its noise.
-
-    A pixel's relative error e moves by at most σ (1 + e) to first order when its reference
-    value moves by σ of itself; the median over ``mask`` then lies between the medians of
-    e − σ (1 + e) and of e + σ (1 + e). Where only a few pixels are noisy the median barely
-    moves, wherever they are; where all are, the spread is about their median noise (the
-    rule without a per-pixel noise).
-
-    Parameters
-    ----------
-    hdr, reference_hdr : (h, w, 3) float32
-        The method's frame and the reference, linear.
-    pixel_noise : (h, w) float
-        The reference's relative standard error per pixel (0 where it is exact, inf where
-        unknown).
-    mask : (h, w) bool
-        The pixels compared.
-
-    Returns
-    -------
-    float
-        Unitless, ≥ 0.
-    """
-    error = relative_error(hdr, reference_hdr)[mask].astype(np.float64)
-    moved = np.asarray(pixel_noise, dtype=np.float64)[mask] * (1.0 + error)
-    high = np.median(error + moved)
-    low = np.median(np.maximum(error - moved, 0.0))
-    return float(0.5 * (high - low))
-
-
 def control_variate_uncertainty(
     hdr: npt.NDArray[np.float32],
     reference_hdr: npt.NDArray[np.float32],
@@ -262,18 +225,10 @@ def control_variate_uncertainty(
     mask: npt.NDArray,
     half_hdr: npt.NDArray[np.float32] | None,
 ) -> float:
-    """What a control-variate reference leaves uncertain in a method's median error: the
-    larger of :func:`median_error_spread` (every pixel moved by its noise at once) and
+    """What a control-variate reference leaves uncertain in a method's median error:
     :data:`CONFIDENCE` times the standard error its noise gives the median
     (:func:`median_error_uncertainty`) and its drift since the estimate of half the samples,
     combined in quadrature.
-
-    The standard error alone is far smaller than the spread (pixels are independent), but a
-    rule on it stops too soon where the scene hides rare bright paths: on the torus knot under
-    the studio map at N = 10 the errors at 64 samples were up to 49 % off those at 5335, with
-    no drift since 32 samples (neither half had found them yet) and a standard error of 2 %
-    (studies/exact-reference/README.md, "The median's standard error"). The spread's caution
-    stays; the drift is added where it is larger.
 
     The drift is what the noise does not show: a pixel whose lobe the scene cuts rarely has
     traced nothing yet, so its difference and its noise read zero, and the estimate is off
@@ -281,8 +236,15 @@ def control_variate_uncertainty(
     median error since half the samples is about what is left of it (and more, with the
     half's noise in it). Where it falls slower (a diffuse term, which nearly every pixel of a
     self-occluding mesh traces) the drift reads short of it: on the bunny at k_d = 0.3 the
-    errors at 64 samples were up to 2.7 times the uncertainty off those at 3642
-    (studies/exact-reference/README.md, "The median's standard error").
+    errors at 64 samples were up to 2.7 times the uncertainty off those at 3642, hence the
+    factor (studies/exact-reference/README.md, "The median's standard error").
+
+    No rule on the samples' own statistics sees a bright path none has drawn: before the
+    traced paths sampled the environment at every hit (shaders/reference/paths.glsl), the
+    studio knot at N = 10 stopped at 64 samples with parallax's error 49 % off, and the
+    coherent spread (every pixel moved by its noise at once) was kept as a floor. With them
+    it stops at 213 samples within 2.2 % of the errors at 5335
+    (studies/exact-reference/README.md, "Next-event estimation").
 
     Parameters
     ----------
@@ -301,8 +263,7 @@ def control_variate_uncertainty(
         return math.inf
     drift = median_error(hdr, reference_hdr, mask) - median_error(hdr, half_hdr, mask)
     noise = median_error_uncertainty(hdr, reference_hdr, pixel_noise, mask)
-    spread = median_error_spread(hdr, reference_hdr, pixel_noise, mask)
-    return max(spread, CONFIDENCE * float(math.hypot(noise, drift)))
+    return CONFIDENCE * float(math.hypot(noise, drift))
 
 
 class ReferenceJudge:
