@@ -1,6 +1,6 @@
 """An atlas measured again against the record: how far each cell moved.
 
-    python studies/atlas-full/against_before.py studies/atlas-full/atlas.csv \
+    python studies/atlas-full/against_before.py studies/atlas-full/atlas-spread-rule.csv \
         studies/atlas-full/atlas-bootstrap-rule.csv
 
 Both are atlas.csv files of the same grid. For the cells measured in both: the largest change
