@@ -18,6 +18,7 @@ from envstudio.io.images import read_image
 from envstudio.io.scene_setup import build_scene
 from envstudio.measure.compare import footprint_filter, plan_parameters
 from envstudio.measure.stopping import (
+    MARGIN,
     NOISE_RULE,
     NOISE_SHARE,
     TOLERANCE_RULE,
@@ -355,8 +356,23 @@ def test_the_progress_line_shows_the_noise_each_error_and_the_projected_time_lef
     assert line.startswith("noise 4 % (needs < 1 %); errors: mirror 50 % ✓, kautz 10 %")
     assert line.endswith("≈ 30 s to go")
     assert not judge.satisfied()
-    judge = judge_with(0.009, {"mirror": 0.5, "kautz": 0.1}, 1600, 32.0, judge)
+    judge = judge_with(0.0049, {"mirror": 0.5, "kautz": 0.1}, 1600, 32.0, judge)
     assert judge.satisfied() and judge.seconds_left() == 0.0
+
+
+def test_a_method_within_the_margin_of_its_limit_passes_at_two_judgements_in_a_row():
+    """Noise 0.9 % against kautz's 10 %: under its limit (1 %) but not under MARGIN of it,
+    so the rule waits for a second such judgement; 0.49 % passes at once."""
+    assert MARGIN == 0.5
+    judge = judge_with(0.04, {"kautz": 0.1}, 100, 2.0)
+    judge = judge_with(0.009, {"kautz": 0.1}, 1600, 32.0, judge)
+    assert judge.last.all_reliable and not judge.satisfied(), "a first pass near the limit"
+    judge = judge_with(0.0095, {"kautz": 0.1}, 1800, 36.0, judge)
+    assert judge.satisfied(), "confirmed at the next judgement"
+    early = judge_with(0.009, {"kautz": 0.1}, 7 * 8, 1.0)
+    early = judge_with(0.009, {"kautz": 0.1}, 8 * 8, 1.2, early)
+    assert not early.satisfied(), "a judgement before MIN_JUDGED_BATCHES confirms nothing"
+    assert judge_with(0.0049, {"kautz": 0.1}, 64, 1.0).satisfied()
 
 
 def test_the_noise_rule_waits_for_enough_batches_and_judges_at_checkpoints():
