@@ -250,7 +250,7 @@ def control_variate_uncertainty(
     traced paths sampled the environment at every hit (shaders/reference/paths.glsl), the
     studio knot at N = 10 stopped at 64 samples with parallax's error 49 % off, and the
     coherent spread (every pixel moved by its noise at once) was kept as a floor. With them
-    it stops at 213 samples within 2.2 % of the errors at 5335
+    it stops at 251 samples within 1.6 % of the errors at 5335
     (studies/exact-reference/README.md, "Next-event estimation").
 
     Parameters
