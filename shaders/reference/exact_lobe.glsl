@@ -27,10 +27,13 @@ layout(std430, binding = 0) readonly buffer Normals { vec4 normals[]; };
 layout(std430, binding = 1) readonly buffer Views { vec4 views[]; };
 layout(std430, binding = 2) readonly buffer Tangents { vec4 tangents[]; };
 layout(std430, binding = 3) buffer Sums { vec4 sums[]; };
-// Each sample's descent, kept between dispatches: its stack of nodes (column, row, level)
-// and how many it holds (-1: not started; 0: finished).
+// Each sample's descent, in the buffer (and so kept between dispatches): its stack of nodes
+// (column, row, level) and how many it holds (-1: not started; 0: finished).
 layout(std430, binding = 4) buffer Stacks { ivec4 stacks[]; };
 layout(std430, binding = 5) buffer Tops { int tops[]; };
+// Level 0's rows, then its columns (exact_lobes.band_table): a row's (cos, sin) of its upper
+// edge theta0 and its texels' solid angle; a column's (cos, sin) of its left edge phi0.
+layout(std430, binding = 6) readonly buffer Bands { vec4 bands[]; };
 
 uniform sampler2D u_radiance;   // per level: W (rgb, radiance x sr), rho (a, radians)
 uniform sampler2D u_direction;  // per level: d (xyz, unit)
@@ -42,7 +45,6 @@ uniform int u_start_level;
 uniform int u_budget;           // iterations a dispatch may spend on a sample
 uniform int u_first_sample;
 uniform int u_samples;
-uniform int u_model;            // 1 microfacet, 2 banks
 uniform float u_accept;
 uniform float u_mean_radiance;  // the map's mean radiance, its largest channel (sr^-1 W)
 uniform float u_alpha;
@@ -126,7 +128,7 @@ float angle_between(vec3 a, vec3 b) { return atan(length(cross(a, b)), dot(a, b)
 
 // The lobe (BRDF times the cosine where the model has one), per channel, at unit l.
 vec3 lobe(vec3 l) {
-    if (u_model == 1) {
+    if (MODEL == 1) {
         float n_dot_l = dot(g_n, l);
         if (n_dot_l <= 0.0) return vec3(0.0);
         vec3 h = normalize(l + g_v);
@@ -143,10 +145,10 @@ vec3 lobe(vec3 l) {
 // 2: refine. `split`: parts a texel edge is cut into when it is refined at level 0.
 int classify(vec3 d, float rho, float brightness, out int split) {
     float from_n = angle_between(g_n, d);
-    bool shadowed = u_model == 1 || u_self_shadowing;
+    bool shadowed = MODEL == 1 || u_self_shadowing;
     split = 4;
     if (shadowed && from_n - rho >= 0.5 * PI) return 0;
-    if (u_model == 1) {
+    if (MODEL == 1) {
         vec3 h = normalize(d + g_v);
         float rho_h = rho / (2.0 * max(dot(g_v, h), 1e-3));
         float from_h = angle_between(g_n, h);
@@ -177,26 +179,38 @@ int classify(vec3 d, float rho, float brightness, out int split) {
     return rho <= scale ? 1 : 2;
 }
 
-// The mean of the lobe over a distribution of directions with centroid s and second moment
-// (a, b; b, c) about it in the plane (e1, e2) across s: a three-point rule that integrates every
-// quadratic exactly, the points s + sqrt(2) C z_k with z_k the unit vectors at 0, 120 and 240
-// degrees and C C^T = (a, b; b, c) (Cholesky), each read through l / |l| (the lobe taken
-// constant along rays, so the offsets along s do not matter).
-vec3 three_points(vec3 s, vec3 e1, vec3 e2, float a, float b, float c) {
-    float l11 = sqrt(max(a, 0.0));
-    float l21 = l11 > 0.0 ? b / l11 : 0.0;
-    float l22 = sqrt(max(c - l21 * l21, 0.0));
-    vec3 c1 = 1.41421356 * (l11 * e1 + l21 * e2);
-    vec3 c2 = 1.41421356 * l22 * e2;
-    vec3 total = lobe(normalize(s + c1));
-    total += lobe(normalize(s - 0.5 * c1 + 0.8660254 * c2));
-    total += lobe(normalize(s - 0.5 * c1 - 0.8660254 * c2));
-    return total / 3.0;
+// A distribution of directions with centroid s and second moment (a, b; b, c) about it in
+// the plane (e1, e2) across s, and the radiance it carries (`weight`, W = sum L dw): what
+// three_points integrates the lobe over.
+struct Quadrature {
+    vec3 s;
+    vec3 e1;
+    vec3 e2;
+    float a;
+    float b;
+    float c;
+    vec3 weight;
+};
+
+// The lobe's integral over a Quadrature q: a three-point rule that integrates every quadratic
+// exactly, the points s + sqrt(2) C z_k with z_k the unit vectors at 0, 120 and 240 degrees
+// and C C^T = (a, b; b, c) (Cholesky), each read through l / |l| (the lobe taken constant
+// along rays, so the offsets along s do not matter), their mean times q.weight.
+vec3 three_points(Quadrature q) {
+    float l11 = sqrt(max(q.a, 0.0));
+    float l21 = l11 > 0.0 ? q.b / l11 : 0.0;
+    float l22 = sqrt(max(q.c - l21 * l21, 0.0));
+    vec3 c1 = 1.41421356 * (l11 * q.e1 + l21 * q.e2);
+    vec3 c2 = 1.41421356 * l22 * q.e2;
+    vec3 total = lobe(normalize(q.s + c1));
+    total += lobe(normalize(q.s - 0.5 * c1 + 0.8660254 * c2));
+    total += lobe(normalize(q.s - 0.5 * c1 - 0.8660254 * c2));
+    return q.weight * (total / 3.0);
 }
 
-// The lobe over a node of level >= 1 accepted as smooth, over the node's radiance: its
-// centroid s and second moment S about s (prefilter/hierarchical.py), S's part across s.
-vec3 node_lobe(ivec3 node) {
+// A node of level >= 1 accepted as smooth, over the node's radiance W: its centroid s and
+// second moment S about s (prefilter/hierarchical.py), S's part across s.
+Quadrature node_quadrature(ivec3 node, vec3 w) {
     vec3 s = texelFetch(u_centroid, node.xy, node.z).xyz;
     vec3 d = normalize(s);
     vec3 e1 = normalize(abs(d.y) < 0.9 ? cross(d, vec3(0.0, 1.0, 0.0)) : cross(d, vec3(1.0, 0.0, 0.0)));
@@ -206,28 +220,51 @@ vec3 node_lobe(ivec3 node) {
     mat3 spread = mat3(m.x, 0.5 * m.w, 0.5 * r.x,
                        0.5 * m.w, m.y, 0.5 * r.y,
                        0.5 * r.x, 0.5 * r.y, m.z);
-    return three_points(s, e1, e2, dot(e1, spread * e1), dot(e1, spread * e2), dot(e2, spread * e2));
+    return Quadrature(s, e1, e2, dot(e1, spread * e1), dot(e1, spread * e2), dot(e2, spread * e2), w);
+}
+
+// (cos x, sin x) of a small angle, |x| at most a texel's edge (pi / 4 and less: within 3e-8),
+// by their Taylor series: the parts' angles are a table's plus such offsets, without the
+// trigonometric functions every iteration of the descent would pay for (llvmpipe runs each
+// branch of the loop for all 8 invocations it takes together).
+vec2 cos_sin_small(float x) {
+    float x2 = x * x;
+    float c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+    float s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+    return vec2(c, s);
+}
+
+// (cos, sin) of a + x from (cos a, sin a) and a small x.
+vec2 turned(vec2 a, float x) {
+    vec2 b = cos_sin_small(x);
+    return vec2(a.x * b.x - a.y * b.y, a.y * b.x + a.x * b.y);
 }
 
 // Part k of texel (column, row) of level 0, cut into split x split parts (split 1: the whole
-// texel), radiance constant over it: the lobe's integral over the part times that radiance.
-// The part's centroid and second moment are its area's: theta's mean weighted by sin(theta),
-// and the variances (theta1 - theta0)^2 / 12 along theta, (sin(theta) dphi)^2 / 12 along phi.
-vec3 texel_part(ivec2 texel, vec3 w, int split, int k) {
-    vec3 radiance = w / latlong_texel_solid_angle(texel, u_level0);
-    float t0 = PI * (float(texel.y) + float(k / split) / float(split)) / float(u_level0.y);
-    float t1 = t0 + PI / float(u_level0.y * split);
+// texel), its radiance constant over it. The part's centroid and second moment are its
+// area's: theta's mean weighted by sin(theta), m + cot(m) (1 - q cot q) for the part's middle
+// m and half height q (1 - q cot q = q^2 / 3 + q^4 / 45 + 2 q^6 / 945 + ...), and the variances
+// (2 q)^2 / 12 along theta, (sin(theta) dphi)^2 / 12 along phi; its solid angle
+// 2 dphi sin(m) sin(q).
+Quadrature part_quadrature(ivec2 texel, int split, int k) {
+    vec4 row = bands[texel.y];
+    vec2 column = bands[u_level0.y + texel.x].xy;
+    float height = PI / float(u_level0.y * split);
     float dphi = 2.0 * PI / float(u_level0.x * split);
-    float omega = dphi * (cos(t0) - cos(t1));
-    float theta = (sin(t1) - sin(t0) - t1 * cos(t1) + t0 * cos(t0)) / (cos(t0) - cos(t1));
-    float u = (float(texel.x) + (float(k % split) + 0.5) / float(split)) / float(u_level0.x);
-    vec3 d = latlong_direction(vec2(u, theta / PI));
-    float phi = 2.0 * PI * (u - 0.5);
-    vec3 along_theta = vec3(cos(theta) * sin(phi), -sin(theta), -cos(theta) * cos(phi));
-    vec3 along_phi = vec3(cos(phi), 0.0, sin(phi));
-    float a = (sin(theta) * dphi) * (sin(theta) * dphi) / 12.0;
-    float c = (t1 - t0) * (t1 - t0) / 12.0;
-    return radiance * three_points(d, along_phi, along_theta, a, 0.0, c) * omega;
+    float q = 0.5 * height;
+    vec2 middle = turned(row.xy, (float(k / split) + 0.5) * height);
+    float q2 = q * q;
+    float shift = middle.x / middle.y * q2 * (1.0 / 3.0 + q2 * (1.0 / 45.0 + q2 * (2.0 / 945.0)));
+    vec2 theta = turned(middle, shift);
+    vec2 phi = turned(column, (float(k % split) + 0.5) * dphi);
+    float omega = 2.0 * dphi * middle.y * cos_sin_small(q).y;
+    vec3 d = vec3(theta.y * phi.y, theta.x, -theta.y * phi.x);
+    vec3 along_theta = vec3(theta.x * phi.y, -theta.y, -theta.x * phi.x);
+    vec3 along_phi = vec3(phi.x, 0.0, phi.y);
+    float a = (theta.y * dphi) * (theta.y * dphi) / 12.0;
+    float c = height * height / 12.0;
+    vec3 radiance = texelFetch(u_radiance, texel, 0).rgb / row.z;
+    return Quadrature(d, along_phi, along_theta, a, 0.0, c, radiance * omega);
 }
 
 // Cell k of the peak cap: half vectors of equal probability under D <n, h> (u = F(theta), the
@@ -270,7 +307,7 @@ bool set_frame(int sample_index) {
     if (g_n_dot_v <= 0.0) return false;
     g_peak_cap = 0.0;
     g_cos_peak_cap = 2.0;
-    if (u_model == 1) {
+    if (MODEL == 1) {
         float part = 0.7 * PI / float(u_level0.y * MAX_SPLIT);  // a finest part's cap radius
         if (2.0 * u_alpha * g_n_dot_v < part) {
             float resolved = part / (2.0 * u_accept * GGX_TAIL * g_n_dot_v);
@@ -278,7 +315,7 @@ bool set_frame(int sample_index) {
             g_cos_peak_cap = cos(g_peak_cap);
         }
     }
-    if (u_model == 2) {
+    if (MODEL == 2) {
         g_t = tangents[sample_index].xyz;
         float b = dot(g_v, g_t);
         float psi;
@@ -314,50 +351,59 @@ void main() {
         tops[index] = 0;
         return;
     }
-    // the stack lives in a local array while the sample runs, in the buffer between dispatches
-    ivec3 stack[STACK];
+    // the sample's stack, kept in the buffer between dispatches
     int base = index * STACK;
     if (top < 0) {  // the first dispatch: every node of the start level
         ivec2 start = textureSize(u_radiance, u_start_level);
         top = start.x * start.y;
-        for (int k = 0; k < top; ++k) stack[k] = ivec3(k % start.x, k / start.x, u_start_level);
-    } else {
-        for (int k = 0; k < top; ++k) stack[k] = stacks[base + k].xyz;
+        for (int k = 0; k < top; ++k) stacks[base + k] = ivec4(k % start.x, k / start.x, u_start_level, 0);
     }
     vec3 total = vec3(0.0);
     int budget = u_budget;
     while (top > 0 && budget > 0) {
-        ivec3 node = stack[--top];
+        ivec3 node = stacks[base + --top].xyz;
         --budget;
+        // What the iteration integrates, if anything: part k of a texel cut into split x split
+        // parts (split 1: a whole texel accepted at level 0) over its area, or a node of level
+        // >= 1 over its radiance's moments. One three_points call takes either: llvmpipe runs
+        // every branch any of the 8 invocations it runs as one takes, so each call site (and
+        // each trigonometric function) costs every iteration.
+        int split = 0;  // 0: no part
+        int k = 0;
+        bool moments = false;
+        vec4 w = vec4(0.0);
         if (node.z < 0) {
             int code = -1 - node.z;
-            int split = code % PART_CODE;
-            int k = code / PART_CODE;
-            total += texel_part(node.xy, texelFetch(u_radiance, node.xy, 0).rgb, split, k);
-            if (k + 1 < split * split) stack[top++] = ivec3(node.xy, -1 - ((k + 1) * PART_CODE + split));
-            continue;
-        }
-        vec4 w = texelFetch(u_radiance, node.xy, node.z);
-        if (w.r + w.g + w.b <= 0.0) continue;
-        int split;
-        // the node's mean radiance over the map's: its error counts that much more
-        float area = node.z == 0 ? latlong_texel_solid_angle(node.xy, u_level0) : PI * w.a * w.a;
-        float brightness = max(w.r, max(w.g, w.b)) / (area * u_mean_radiance);
-        int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, brightness, split);
-        if (verdict == 0) continue;
-        if (verdict == 1) {
-            total += node.z == 0 ? texel_part(node.xy, w.rgb, 1, 0) : w.rgb * node_lobe(node);
-        } else if (node.z == 0) {
-            stack[top++] = ivec3(node.xy, -1 - split);
+            split = code % PART_CODE;
+            k = code / PART_CODE;
+            if (k + 1 < split * split) {
+                stacks[base + top++] = ivec4(node.xy, -1 - ((k + 1) * PART_CODE + split), 0);
+            }
         } else {
-            ivec2 child = 2 * node.xy;
-            stack[top++] = ivec3(child, node.z - 1);
-            stack[top++] = ivec3(child + ivec2(1, 0), node.z - 1);
-            stack[top++] = ivec3(child + ivec2(0, 1), node.z - 1);
-            stack[top++] = ivec3(child + ivec2(1, 1), node.z - 1);
+            w = texelFetch(u_radiance, node.xy, node.z);
+            if (w.r + w.g + w.b <= 0.0) continue;
+            int parts;
+            // the node's mean radiance over the map's: its error counts that much more
+            float area = node.z == 0 ? bands[node.y].z : PI * w.a * w.a;
+            float brightness = max(w.r, max(w.g, w.b)) / (area * u_mean_radiance);
+            int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, brightness, parts);
+            if (verdict == 0) continue;
+            if (verdict == 1) {
+                moments = node.z > 0;
+                split = moments ? 0 : 1;
+            } else if (node.z == 0) {
+                stacks[base + top++] = ivec4(node.xy, -1 - parts, 0);
+            } else {
+                ivec2 child = 2 * node.xy;
+                stacks[base + top++] = ivec4(child, node.z - 1, 0);
+                stacks[base + top++] = ivec4(child + ivec2(1, 0), node.z - 1, 0);
+                stacks[base + top++] = ivec4(child + ivec2(0, 1), node.z - 1, 0);
+                stacks[base + top++] = ivec4(child + ivec2(1, 1), node.z - 1, 0);
+            }
         }
+        if (!moments && split == 0) continue;
+        total += three_points(moments ? node_quadrature(node, w.rgb) : part_quadrature(node.xy, split, k));
     }
-    for (int k = 0; k < top; ++k) stacks[base + k] = ivec4(stack[k], 0);
     tops[index] = top;
     sums[sample_index] += vec4(total, 0.0);
 }

@@ -37,7 +37,7 @@ import moderngl
 import numpy as np
 import numpy.typing as npt
 
-from envstudio.core import ggx
+from envstudio.core import ggx, latlong
 from envstudio.errors import ParameterError
 from envstudio.gpu.programs import ProgramLibrary
 from envstudio.gpu.uniforms import set_uniform
@@ -106,8 +106,27 @@ class LobeModel:
     self_shadowing: bool = False
 
 
+def band_table(height: int, width: int) -> npt.NDArray[np.float32]:
+    """Level 0's rows and columns as exact_lobe.glsl's ``bands`` holds them.
+
+    Returns
+    -------
+    (height + width, 4) float32
+        Row r: cos θ₀, sin θ₀ of its upper edge θ₀ = π r / height, its texels' solid angle
+        (sr), 0. Column c: cos φ₀, sin φ₀ of its left edge φ₀ = 2π (c / width − ½), 0, 0.
+    """
+    table = np.zeros((height + width, 4))
+    theta = np.pi * np.arange(height) / height
+    table[:height, 0], table[:height, 1] = np.cos(theta), np.sin(theta)
+    table[:height, 2] = latlong.texel_solid_angles(height, width)[:, 0]
+    phi = 2.0 * np.pi * (np.arange(width) / width - 0.5)
+    table[height:, 0], table[height:, 1] = np.cos(phi), np.sin(phi)
+    return table.astype(np.float32)
+
+
 class PyramidTextures:
-    """The environment's pyramid on the GPU: per level W and ρ, d, and the centroid s.
+    """The environment's pyramid on the GPU: per level W and ρ, d, and the centroid s; and
+    :func:`band_table`'s storage buffer.
 
     Parameters
     ----------
@@ -152,6 +171,7 @@ class PyramidTextures:
         for texture in textures:
             texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
         self.textures = textures
+        self.bands = ctx.buffer(band_table(h, w).tobytes())
         top = np.asarray(pyramid.radiance[levels - 1]).reshape(3, -1).sum(axis=1)
         self.mean_radiance = float(max(top.max(), 1e-30) / (4.0 * math.pi))
         """The map's mean radiance over the sphere, its largest channel (Σ W / 4π)."""
@@ -159,6 +179,7 @@ class PyramidTextures:
     def release(self) -> None:
         for texture in self.textures:
             texture.release()
+        self.bands.release()
 
 
 class LobeEvaluator:
@@ -246,12 +267,13 @@ def glossy_term(
     chunk = min(count, SAMPLES_PER_DISPATCH)
     stacks = ctx.buffer(reserve=16 * stack_size * chunk)
     tops = ctx.buffer(reserve=4 * chunk)
-    shader = programs.compute("reference/exact_lobe.glsl", {"STACK_SIZE": stack_size})
+    # the model a compile-time constant: llvmpipe would run both models' branches otherwise
+    defines = {"STACK_SIZE": stack_size, "MODEL": _MODELS[model.name]}
+    shader = programs.compute("reference/exact_lobe.glsl", defines)
     passes = [shader]
     if model.name == "microfacet":  # the peak caps of lobes narrower than a texel's part
-        defines = {"STACK_SIZE": stack_size, "PEAK_PASS": 1}
-        passes.append(programs.compute("reference/exact_lobe.glsl", defines))
-    for binding, buffer in enumerate([*buffers, stacks, tops]):
+        passes.append(programs.compute("reference/exact_lobe.glsl", {**defines, "PEAK_PASS": 1}))
+    for binding, buffer in enumerate([*buffers, stacks, tops, textures.bands]):
         buffer.bind_to_storage_buffer(binding)
     for unit, texture in enumerate(textures.textures):
         texture.use(unit)
@@ -259,7 +281,6 @@ def glossy_term(
         **{name: unit for unit, name in enumerate(TEXTURE_NAMES)},
         "u_level0": textures.size,
         "u_start_level": textures.start_level,
-        "u_model": _MODELS[model.name],
         "u_accept": accept,
         "u_mean_radiance": textures.mean_radiance,
         "u_alpha": model.alpha,
