@@ -8,7 +8,7 @@
 // prefilter/hierarchical.py builds it), from each node of the start level down. A node
 // (radiance sum W = sum L dw, mean direction d, cap radius rho about d, radiance centroid s,
 // second moment S) is skipped when the lobe is zero over its cap, accepted with the lobe's
-// mean over its radiance (three_points) when the lobe is smooth over it (classify), and
+// mean over its radiance (lobe_mean) when the lobe is smooth over it (classify), and
 // refined into its four children otherwise. A texel that is still refined is cut into k x k parts of its own
 // radiance, each taken at its centre (finer than the lobe at its distance).
 // A microfacet lobe narrower than a texel's finest part has its peak taken over half vectors
@@ -35,18 +35,18 @@ layout(std430, binding = 5) buffer Tops { int tops[]; };
 // edge theta0 and its texels' solid angle; a column's (cos, sin) of its left edge phi0.
 layout(std430, binding = 6) readonly buffer Bands { vec4 bands[]; };
 
-uniform sampler2D u_radiance;   // per level: W (rgb, radiance x sr), rho (a, radians)
-uniform sampler2D u_direction;  // per level: d (xyz, unit)
-uniform sampler2D u_centroid;   // per level: s (xyz, not normalised)
-uniform sampler2D u_spread;     // per level: S / w about s (xx, yy, zz, 2xy)
-uniform sampler2D u_spread_rest;  // per level: (2xz, 2yz)
+// The pyramid (exact_lobes.PyramidTextures), per level:
+uniform sampler2D u_radiance;   // W (rgb, radiance x sr), rho (a, radians)
+uniform sampler2D u_direction;  // d (xyz, unit), the acceptance's shrink for a bright node (a)
+uniform sampler2D u_point0;     // the three points of the node's rule (xyz each; lobe_mean)
+uniform sampler2D u_point1;
+uniform sampler2D u_point2;
 uniform ivec2 u_level0;         // (columns, rows) of level 0
 uniform int u_start_level;
 uniform int u_budget;           // iterations a dispatch may spend on a sample
 uniform int u_first_sample;
 uniform int u_samples;
 uniform float u_accept;
-uniform float u_mean_radiance;  // the map's mean radiance, its largest channel (sr^-1 W)
 uniform float u_alpha;
 uniform vec3 u_fresnel;
 uniform bool u_banks_normalize;
@@ -69,20 +69,13 @@ const float BANKS_EDGE = 1.0;
 // as k <n, l> with k = D F / (4 <n, v>) dG2/d<n, l> = D F / (2 alpha <n, v>) (G2 ~ 2 <n, l> /
 // alpha there), and the three-point rule over a node of radius rho across it errs by about
 // k rho^3 of its radiance: nodes there are refined to rho^2 k under this.
-// k grows with the node's brightness over the map's mean, as BRIGHT_POWER's scale. Against
+// k grows with the node's brightness over the map's mean, as the shrink's scale. Against
 // tests/microfacet_numpy_reference.py on a sphere under a small sun (32 x 64 map, 584 pixel
 // centres): without it up to 23 % at alpha = 0.5 (at the pixels whose horizon crosses the
-// sun), with 3e-4 at most 1.2 % at every alpha (1.1 % with 1e-4; 0.08 % with BRIGHT_POWER too);
+// sun), with 3e-4 at most 1.2 % at every alpha (1.1 % with 1e-4; 0.08 % with the shrink too);
 // on the sunrise sphere at 96 x 96 x 16 samples it costs 1.6 times the time at N = 10, 1.1 at 1000.
 const float HORIZON_TOLERANCE = 3e-4;
 const int STACK = STACK_SIZE;
-// A node brighter than the map's mean (a sun) errs in proportion to its radiance, so its
-// acceptance scale shrinks by the cube root of how much brighter it is (the three-point
-// rule errs as the cube of the node's size over the lobe's scale). Against the NumPy sum on
-// a sphere under a small sun (32 x 64 map, 2 x 2-texel sun at 2000, 584 pixel centres): at
-// most 0.08 % instead of 1.14 % (a pixel whose horizon held the sun); 1-5 % more time on the
-// sunrise sphere at 96 x 96 x 16.
-const float BRIGHT_POWER = 1.0 / 3.0;
 // A GGX lobe narrower across than a texel's finest part (a grazing view of a sharp lobe: the
 // reflected lobe is about 2 alpha <n, v> wide across the plane of incidence, and the
 // three-point rule over a part wider than it errs by 12-50 %) is taken in two: the half
@@ -142,8 +135,10 @@ vec3 lobe(vec3 l) {
 }
 
 // 0: the lobe is zero over the cap (d, rho); 1: smooth over it, take it at the centroid;
-// 2: refine. `split`: parts a texel edge is cut into when it is refined at level 0.
-int classify(vec3 d, float rho, float brightness, out int split) {
+// 2: refine. `shrink`: the node's brightness over the map's mean, at least 1, to the power
+// exact_lobes.BRIGHT_POWER; `split`: parts a texel edge is cut into when it is refined at
+// level 0.
+int classify(vec3 d, float rho, float shrink, out int split) {
     float from_n = angle_between(g_n, d);
     bool shadowed = MODEL == 1 || u_self_shadowing;
     split = 4;
@@ -153,13 +148,12 @@ int classify(vec3 d, float rho, float brightness, out int split) {
         float rho_h = rho / (2.0 * max(dot(g_v, h), 1e-3));
         float from_h = angle_between(g_n, h);
         if (from_h + rho_h < g_peak_cap) return 0;  // peak_cell's
-        float scale = u_accept * max(u_alpha, GGX_TAIL * (from_h - rho_h))
-                      / pow(max(brightness, 1.0), BRIGHT_POWER);
+        float scale = u_accept * max(u_alpha, GGX_TAIL * (from_h - rho_h)) / shrink;
         split = int(clamp(ceil(rho_h / scale), 2.0, float(MAX_SPLIT)));
         bool accepted = rho_h <= scale;
         if (from_n + rho > 0.5 * PI) {  // across the horizon
             float k = ggx_d(cos(max(from_h - rho_h, 0.0)), u_alpha) / (2.0 * u_alpha * g_n_dot_v)
-                      * max(brightness, 1.0);
+                      * (shrink * shrink * shrink);
             float widest = sqrt(HORIZON_TOLERANCE / max(k, 1e-20));
             split = int(clamp(max(float(split), ceil(rho / widest)), 2.0, float(MAX_SPLIT)));
             accepted = accepted && rho <= widest;
@@ -174,53 +168,21 @@ int classify(vec3 d, float rho, float brightness, out int split) {
     bool inside = from_t - rho >= g_band_lo && from_t + rho <= g_band_hi;
     bool horizon = u_self_shadowing && from_n + rho > 0.5 * PI;
     float scale = (inside && !horizon ? BANKS_INSIDE : BANKS_EDGE) * u_accept * g_band_half
-                  / pow(max(brightness, 1.0), BRIGHT_POWER);
+                  / shrink;
     split = int(clamp(ceil(rho / scale), 2.0, float(MAX_SPLIT)));
     return rho <= scale ? 1 : 2;
 }
 
-// A distribution of directions with centroid s and second moment (a, b; b, c) about it in
-// the plane (e1, e2) across s, and the radiance it carries (`weight`, W = sum L dw): what
-// three_points integrates the lobe over.
-struct Quadrature {
-    vec3 s;
-    vec3 e1;
-    vec3 e2;
-    float a;
-    float b;
-    float c;
-    vec3 weight;
-};
-
-// The lobe's integral over a Quadrature q: a three-point rule that integrates every quadratic
-// exactly, the points s + sqrt(2) C z_k with z_k the unit vectors at 0, 120 and 240 degrees
-// and C C^T = (a, b; b, c) (Cholesky), each read through l / |l| (the lobe taken constant
-// along rays, so the offsets along s do not matter), their mean times q.weight.
-vec3 three_points(Quadrature q) {
-    float l11 = sqrt(max(q.a, 0.0));
-    float l21 = l11 > 0.0 ? q.b / l11 : 0.0;
-    float l22 = sqrt(max(q.c - l21 * l21, 0.0));
-    vec3 c1 = 1.41421356 * (l11 * q.e1 + l21 * q.e2);
-    vec3 c2 = 1.41421356 * l22 * q.e2;
-    vec3 total = lobe(normalize(q.s + c1));
-    total += lobe(normalize(q.s - 0.5 * c1 + 0.8660254 * c2));
-    total += lobe(normalize(q.s - 0.5 * c1 - 0.8660254 * c2));
-    return q.weight * (total / 3.0);
+// The lobe's mean over three points (mat3 columns).
+vec3 lobe_mean(mat3 points) {
+    return (lobe(points[0]) + lobe(points[1]) + lobe(points[2])) / 3.0;
 }
 
-// A node of level >= 1 accepted as smooth, over the node's radiance W: its centroid s and
-// second moment S about s (prefilter/hierarchical.py), S's part across s.
-Quadrature node_quadrature(ivec3 node, vec3 w) {
-    vec3 s = texelFetch(u_centroid, node.xy, node.z).xyz;
-    vec3 d = normalize(s);
-    vec3 e1 = normalize(abs(d.y) < 0.9 ? cross(d, vec3(0.0, 1.0, 0.0)) : cross(d, vec3(1.0, 0.0, 0.0)));
-    vec3 e2 = cross(d, e1);
-    vec4 m = texelFetch(u_spread, node.xy, node.z);
-    vec2 r = texelFetch(u_spread_rest, node.xy, node.z).xy;
-    mat3 spread = mat3(m.x, 0.5 * m.w, 0.5 * r.x,
-                       0.5 * m.w, m.y, 0.5 * r.y,
-                       0.5 * r.x, 0.5 * r.y, m.z);
-    return Quadrature(s, e1, e2, dot(e1, spread * e1), dot(e1, spread * e2), dot(e2, spread * e2), w);
+// The three points of a node of level >= 1 accepted as smooth: its three-point rule over the
+// node's radiance, exact for quadratics (exact_lobes.node_points).
+mat3 node_points(ivec3 node) {
+    return mat3(texelFetch(u_point0, node.xy, node.z).xyz, texelFetch(u_point1, node.xy, node.z).xyz,
+                texelFetch(u_point2, node.xy, node.z).xyz);
 }
 
 // (cos x, sin x) of a small angle, |x| at most a texel's edge (pi / 4 and less: within 3e-8),
@@ -245,8 +207,10 @@ vec2 turned(vec2 a, float x) {
 // area's: theta's mean weighted by sin(theta), m + cot(m) (1 - q cot q) for the part's middle
 // m and half height q (1 - q cot q = q^2 / 3 + q^4 / 45 + 2 q^6 / 945 + ...), and the variances
 // (2 q)^2 / 12 along theta, (sin(theta) dphi)^2 / 12 along phi; its solid angle
-// 2 dphi sin(m) sin(q).
-Quadrature part_quadrature(ivec2 texel, int split, int k) {
+// 2 dphi sin(m) sin(q). The three points of the rule over that distribution (node_points'),
+// its second moment diagonal in (along phi, along theta); `weight`: the part's radiance
+// times its solid angle.
+mat3 part_points(ivec2 texel, int split, int k, out vec3 weight) {
     vec4 row = bands[texel.y];
     vec2 column = bands[u_level0.y + texel.x].xy;
     float height = PI / float(u_level0.y * split);
@@ -261,10 +225,12 @@ Quadrature part_quadrature(ivec2 texel, int split, int k) {
     vec3 d = vec3(theta.y * phi.y, theta.x, -theta.y * phi.x);
     vec3 along_theta = vec3(theta.x * phi.y, -theta.y, -theta.x * phi.x);
     vec3 along_phi = vec3(phi.x, 0.0, phi.y);
-    float a = (theta.y * dphi) * (theta.y * dphi) / 12.0;
-    float c = height * height / 12.0;
-    vec3 radiance = texelFetch(u_radiance, texel, 0).rgb / row.z;
-    return Quadrature(d, along_phi, along_theta, a, 0.0, c, radiance * omega);
+    // sqrt(2) times the standard deviations sin(theta) dphi / sqrt(12) and height / sqrt(12)
+    vec3 c1 = (0.40824829 * theta.y * dphi) * along_phi;
+    vec3 c2 = (0.40824829 * height) * along_theta;
+    weight = texelFetch(u_radiance, texel, 0).rgb / row.z * omega;
+    return mat3(normalize(d + c1), normalize(d - 0.5 * c1 + 0.8660254 * c2),
+                normalize(d - 0.5 * c1 - 0.8660254 * c2));
 }
 
 // Cell k of the peak cap: half vectors of equal probability under D <n, h> (u = F(theta), the
@@ -365,7 +331,7 @@ void main() {
         --budget;
         // What the iteration integrates, if anything: part k of a texel cut into split x split
         // parts (split 1: a whole texel accepted at level 0) over its area, or a node of level
-        // >= 1 over its radiance's moments. One three_points call takes either: llvmpipe runs
+        // >= 1 over its radiance. One lobe_mean call takes either: llvmpipe runs
         // every branch any of the 8 invocations it runs as one takes, so each call site (and
         // each trigonometric function) costs every iteration.
         int split = 0;  // 0: no part
@@ -383,10 +349,8 @@ void main() {
             w = texelFetch(u_radiance, node.xy, node.z);
             if (w.r + w.g + w.b <= 0.0) continue;
             int parts;
-            // the node's mean radiance over the map's: its error counts that much more
-            float area = node.z == 0 ? bands[node.y].z : PI * w.a * w.a;
-            float brightness = max(w.r, max(w.g, w.b)) / (area * u_mean_radiance);
-            int verdict = classify(texelFetch(u_direction, node.xy, node.z).xyz, w.a, brightness, parts);
+            vec4 direction = texelFetch(u_direction, node.xy, node.z);
+            int verdict = classify(direction.xyz, w.a, direction.a, parts);
             if (verdict == 0) continue;
             if (verdict == 1) {
                 moments = node.z > 0;
@@ -402,7 +366,9 @@ void main() {
             }
         }
         if (!moments && split == 0) continue;
-        total += three_points(moments ? node_quadrature(node, w.rgb) : part_quadrature(node.xy, split, k));
+        vec3 weight = w.rgb;
+        mat3 points = moments ? node_points(node) : part_points(node.xy, split, k, weight);
+        total += weight * lobe_mean(points);
     }
     tops[index] = top;
     sums[sample_index] += vec4(total, 0.0);

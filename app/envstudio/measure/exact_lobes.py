@@ -48,6 +48,13 @@ ACCEPT = 0.1
 #: Iterations a dispatch spends on a sample at most (llvmpipe ends an invocation's loops
 #: after 65 535 iterations; a texel cut into parts takes up to 16² at once).
 BUDGET = 60000
+#: A node brighter than the map's mean (a sun) errs in proportion to its radiance, so its
+#: acceptance scale shrinks by this power (the cube root) of how much brighter it is (the
+#: three-point rule errs as the cube of the node's size over the lobe's scale). Against the
+#: NumPy sum on a sphere under a small sun (32 × 64 map, 2 × 2-texel sun at 2000, 584 pixel
+#: centres): at most 0.08 % instead of 1.14 % (a pixel whose horizon held the sun); 1–5 %
+#: more time on the sunrise sphere at 96 × 96 × 16.
+BRIGHT_POWER = 1.0 / 3.0
 #: Samples per dispatch.
 SAMPLES_PER_DISPATCH = 1 << 14
 #: Nodes of the level the descent starts at, at least.
@@ -77,7 +84,7 @@ def check_size(height: int, width: int) -> None:
 
 _MODELS = {"microfacet": 1, "banks": 2}
 #: The pyramid's textures in PyramidTextures.textures, by their names in exact_lobe.glsl.
-TEXTURE_NAMES = ("u_radiance", "u_direction", "u_centroid", "u_spread", "u_spread_rest")
+TEXTURE_NAMES = ("u_radiance", "u_direction", "u_point0", "u_point1", "u_point2")
 
 
 @dataclass(frozen=True)
@@ -124,9 +131,53 @@ def band_table(height: int, width: int) -> npt.NDArray[np.float32]:
     return table.astype(np.float32)
 
 
+def node_points(samples: np.ndarray, spreads: np.ndarray) -> np.ndarray:
+    """The three points of each node's three-point rule (exact_lobe.glsl's lobe_mean).
+
+    The rule integrates every quadratic exactly over a distribution of directions with
+    centroid s and second moment (a, b; b, c) about it in the plane (e1, e2) across s: the
+    points s + √2 C z_k, z_k the unit vectors at 0°, 120° and 240° and C Cᵀ = (a, b; b, c)
+    (Cholesky), each taken as l / |l| (the lobe constant along rays). They depend on the
+    node alone, not on the sample, so they are computed once here.
+
+    Parameters
+    ----------
+    samples : (3, n) array_like
+        The nodes' radiance centroids s (not normalised).
+    spreads : (6, n) array_like
+        Their second moments about s over their weight: xx, yy, zz, 2xy, 2xz, 2yz.
+
+    Returns
+    -------
+    (3, n, 3) float64
+        The three unit directions of each node.
+    """
+    s = np.asarray(samples, np.float64).T
+    xx, yy, zz, xy, xz, yz = np.asarray(spreads, np.float64)
+    m = np.stack([xx, xy / 2, xz / 2, xy / 2, yy, yz / 2, xz / 2, yz / 2, zz], -1)
+    m = m.reshape(-1, 3, 3)
+    d = s / np.maximum(np.linalg.norm(s, axis=1, keepdims=True), 1e-30)
+    axis = np.where((np.abs(d[:, 1]) < 0.9)[:, None], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0])
+    e1 = np.cross(d, axis)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(d, e1)
+    a = np.einsum("ni,nij,nj->n", e1, m, e1)
+    b = np.einsum("ni,nij,nj->n", e1, m, e2)
+    c = np.einsum("ni,nij,nj->n", e2, m, e2)
+    l11 = np.sqrt(np.maximum(a, 0.0))
+    l21 = np.divide(b, l11, out=np.zeros_like(b), where=l11 > 0.0)
+    l22 = np.sqrt(np.maximum(c - l21 * l21, 0.0))
+    c1 = math.sqrt(2.0) * (l11[:, None] * e1 + l21[:, None] * e2)
+    c2 = math.sqrt(2.0) * l22[:, None] * e2
+    half = math.sqrt(3.0) / 2.0
+    points = np.stack([s + c1, s - 0.5 * c1 + half * c2, s - 0.5 * c1 - half * c2])
+    return points / np.maximum(np.linalg.norm(points, axis=2, keepdims=True), 1e-30)
+
+
 class PyramidTextures:
-    """The environment's pyramid on the GPU: per level W and ρ, d, and the centroid s; and
-    :func:`band_table`'s storage buffer.
+    """The environment's pyramid on the GPU, as exact_lobe.glsl reads it: per level W and ρ,
+    d and the acceptance's shrink for a bright node, the three points of the node's rule
+    (:func:`node_points`); and :func:`band_table`'s storage buffer.
 
     Parameters
     ----------
@@ -155,15 +206,24 @@ class PyramidTextures:
         textures = [ctx.texture((w, h), 4, dtype="f4") for _ in range(5)]
         for texture in textures:  # allocates the chain; every level is written below
             texture.build_mipmaps(0, levels - 1)
+        top = np.asarray(pyramid.radiance[levels - 1]).reshape(3, -1).sum(axis=1)
+        self.mean_radiance = float(max(top.max(), 1e-30) / (4.0 * math.pi))
+        """The map's mean radiance over the sphere, its largest channel (Σ W / 4π)."""
+        texel_area = np.repeat(band_table(h, w)[:h, 2], w)
         for level, (rows, cols) in enumerate(pyramid.shapes):
             cos_rho, sin_rho = pyramid.radii[level]
-            rho = np.arctan2(sin_rho, cos_rho) * (level > 0) + texel
+            rho = (np.arctan2(sin_rho, cos_rho) * (level > 0) + texel).astype(np.float32)
+            # the node's mean radiance over the map's (its area a texel's or its cap's): the
+            # acceptance shrinks by its BRIGHT_POWER
+            area = texel_area if level == 0 else np.pi * rho.astype(np.float64) ** 2
+            brightest = np.asarray(pyramid.radiance[level], np.float64).max(axis=0)
+            shrink = np.maximum(brightest / (area * self.mean_radiance), 1.0) ** BRIGHT_POWER
+            points = node_points(pyramid.samples[level], pyramid.spreads[level])
+            zeros = np.zeros_like(rho)
             planes = (
                 (*pyramid.radiance[level], rho),
-                (*pyramid.directions[level], np.zeros_like(rho)),
-                (*pyramid.samples[level], np.zeros_like(rho)),
-                tuple(pyramid.spreads[level][:4]),
-                (*pyramid.spreads[level][4:], np.zeros_like(rho), np.zeros_like(rho)),
+                (*pyramid.directions[level], shrink),
+                *((*point.T, zeros) for point in points),
             )
             for texture, plane in zip(textures, planes, strict=True):
                 data = np.stack(plane, axis=-1).reshape(rows, cols, 4).astype(np.float32)
@@ -172,9 +232,6 @@ class PyramidTextures:
             texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
         self.textures = textures
         self.bands = ctx.buffer(band_table(h, w).tobytes())
-        top = np.asarray(pyramid.radiance[levels - 1]).reshape(3, -1).sum(axis=1)
-        self.mean_radiance = float(max(top.max(), 1e-30) / (4.0 * math.pi))
-        """The map's mean radiance over the sphere, its largest channel (Σ W / 4π)."""
 
     def release(self) -> None:
         for texture in self.textures:
@@ -282,7 +339,6 @@ def glossy_term(
         "u_level0": textures.size,
         "u_start_level": textures.start_level,
         "u_accept": accept,
-        "u_mean_radiance": textures.mean_radiance,
         "u_alpha": model.alpha,
         "u_fresnel": model.fresnel,
         "u_sharpness": model.sharpness,
