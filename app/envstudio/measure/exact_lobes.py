@@ -152,26 +152,34 @@ def node_points(samples: np.ndarray, spreads: np.ndarray) -> np.ndarray:
     (3, n, 3) float64
         The three unit directions of each node.
     """
-    s = np.asarray(samples, np.float64).T
+    s = np.asarray(samples, np.float64)
     xx, yy, zz, xy, xz, yz = np.asarray(spreads, np.float64)
-    m = np.stack([xx, xy / 2, xz / 2, xy / 2, yy, yz / 2, xz / 2, yz / 2, zz], -1)
-    m = m.reshape(-1, 3, 3)
-    d = s / np.maximum(np.linalg.norm(s, axis=1, keepdims=True), 1e-30)
-    axis = np.where((np.abs(d[:, 1]) < 0.9)[:, None], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0])
-    e1 = np.cross(d, axis)
-    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
-    e2 = np.cross(d, e1)
-    a = np.einsum("ni,nij,nj->n", e1, m, e1)
-    b = np.einsum("ni,nij,nj->n", e1, m, e2)
-    c = np.einsum("ni,nij,nj->n", e2, m, e2)
-    l11 = np.sqrt(np.maximum(a, 0.0))
-    l21 = np.divide(b, l11, out=np.zeros_like(b), where=l11 > 0.0)
-    l22 = np.sqrt(np.maximum(c - l21 * l21, 0.0))
-    c1 = math.sqrt(2.0) * (l11[:, None] * e1 + l21[:, None] * e2)
-    c2 = math.sqrt(2.0) * l22[:, None] * e2
+
+    def form(u, w):  # uᵀ S w, column by column
+        return (
+            xx * u[0] * w[0]
+            + yy * u[1] * w[1]
+            + zz * u[2] * w[2]
+            + 0.5 * xy * (u[0] * w[1] + u[1] * w[0])
+            + 0.5 * xz * (u[0] * w[2] + u[2] * w[0])
+            + 0.5 * yz * (u[1] * w[2] + u[2] * w[1])
+        )
+
+    d = s / np.maximum(np.linalg.norm(s, axis=0), 1e-30)
+    # e1 = d × y where |d_y| < 0.9, d × x elsewhere; e2 = d × e1
+    y_axis = np.abs(d[1]) < 0.9
+    e1 = np.where(y_axis, [-d[2], np.zeros_like(d[0]), d[0]], [np.zeros_like(d[0]), d[2], -d[1]])
+    e1 /= np.linalg.norm(e1, axis=0)
+    e2 = np.cross(d, e1, axis=0)
+    l11 = np.sqrt(np.maximum(form(e1, e1), 0.0))
+    l21 = np.divide(form(e1, e2), l11, out=np.zeros_like(l11), where=l11 > 0.0)
+    l22 = np.sqrt(np.maximum(form(e2, e2) - l21 * l21, 0.0))
+    c1 = math.sqrt(2.0) * (l11 * e1 + l21 * e2)
+    c2 = math.sqrt(2.0) * l22 * e2
     half = math.sqrt(3.0) / 2.0
     points = np.stack([s + c1, s - 0.5 * c1 + half * c2, s - 0.5 * c1 - half * c2])
-    return points / np.maximum(np.linalg.norm(points, axis=2, keepdims=True), 1e-30)
+    points /= np.maximum(np.linalg.norm(points, axis=1, keepdims=True), 1e-30)
+    return np.swapaxes(points, 1, 2)
 
 
 class PyramidTextures:
