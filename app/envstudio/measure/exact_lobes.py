@@ -378,19 +378,28 @@ def glossy_term(
 
 def microfacet_lobe(
     model: LobeModel, normals: np.ndarray, views: np.ndarray, directions: np.ndarray
-) -> np.ndarray:
-    """D G2 F(v·h) / (4 ⟨n, v⟩) at (p, 3) directions for one sample; (p, 3) per channel."""
-    n_dot_l = directions @ normals
+) -> tuple[np.ndarray, np.ndarray]:
+    """D G2 F(v·h) / (4 ⟨n, v⟩) at (p, 3) directions for one sample, in two factors: the lobe
+    is ``scalar`` × (f_λ + (1 − f_λ) ``schlick``) per channel (Schlick's F), so that a sum
+    over many directions takes two dot products instead of a (p, 3) array.
+
+    Returns
+    -------
+    scalar : (p,) float64
+        D G2 / (4 ⟨n, v⟩); zero where ⟨n, l⟩ ≤ 0.
+    schlick : (p,) float64
+        (1 − ⟨v, h⟩)⁵.
+    """
+    cosines = directions @ np.stack([normals, views], axis=1)
+    n_dot_l, v_dot_l = cosines[:, 0], cosines[:, 1]
     n_dot_v = float(views @ normals)
-    h = directions + views
-    h /= np.linalg.norm(h, axis=1, keepdims=True)
-    d = ggx.distribution(np.maximum(h @ normals, 0.0), model.alpha)
+    # h = (l + v) / |l + v| and |l + v|² = 2 + 2 ⟨v, l⟩
+    inverse = 1.0 / np.sqrt(np.maximum(2.0 + 2.0 * v_dot_l, 1e-300))
+    d = ggx.distribution(np.maximum((n_dot_l + n_dot_v) * inverse, 0.0), model.alpha)
     g2 = ggx.smith_g2(n_dot_l, n_dot_v, model.alpha)
-    m = (1.0 - np.clip(h @ views, 0.0, 1.0)) ** 5
-    f0 = np.asarray(model.fresnel)
-    fresnel = f0 + (1.0 - f0) * m[:, None]
-    value = (d * g2 / (4.0 * n_dot_v))[:, None] * fresnel
-    return np.where((n_dot_l > 0.0)[:, None], value, 0.0)
+    scalar = np.where(n_dot_l > 0.0, d * g2 / (4.0 * n_dot_v), 0.0)
+    schlick = (1.0 - np.clip((v_dot_l + 1.0) * inverse, 0.0, 1.0)) ** 5
+    return scalar, schlick
 
 
 def banks_lobe(
@@ -404,8 +413,9 @@ def banks_lobe(
 
     Returns
     -------
-    lobe : (p, 3) float64
-        f_banks(⟨l, t⟩, ⟨v, t⟩) [max(⟨n, l⟩, 0) with self-shadowing], the same per channel.
+    lobe : (p,) float64
+        f_banks(⟨l, t⟩, ⟨v, t⟩) [max(⟨n, l⟩, 0) with self-shadowing], the same in every
+        channel.
     whole : (p,) float64
         f_banks alone: what its integral over the sphere (the normalisation) sums.
     """
@@ -415,4 +425,4 @@ def banks_lobe(
     bracket = np.sqrt(np.maximum(1.0 - lt * lt, 0.0)) * math.sqrt(max(1.0 - vt * vt, 0.0))
     whole = np.maximum(bracket - lt * vt - s, 0.0) / (1.0 - s) ** 2
     lobe = whole * np.maximum(directions @ normals, 0.0) if model.self_shadowing else whole
-    return np.repeat(lobe[:, None], 3, axis=1), whole
+    return lobe, whole

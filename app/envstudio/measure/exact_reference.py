@@ -316,6 +316,7 @@ def brute_force_radiance(
     directions, weights = gauss_texels(*image.shape[:2], split)
     texel = np.repeat(np.repeat(image, 3 * split, axis=0), 3 * split, axis=1)
     weighted = texel.reshape(-1, 3).astype(np.float64) * weights[:, None]
+    f0 = np.asarray(model.fresnel)
     for k in np.nonzero(np.einsum("sk,sk->s", n, v) > 0.0)[0]:
         total, norm = np.zeros(3), 0.0
         for start in range(0, len(directions), _POINTS_PER_BLOCK):
@@ -323,11 +324,11 @@ def brute_force_radiance(
             if model.name == "banks":
                 lobe, whole = banks_lobe(model, n[k], v[k], tangents[k], directions[block])
                 norm += whole @ weights[block]
-                total += np.einsum("pc,pc->c", lobe, weighted[block])
-            else:  # zero below the horizon: the points above it only
-                up = directions[block] @ n[k] > 0.0
-                lobe = microfacet_lobe(model, n[k], v[k], directions[block][up])
-                total += np.einsum("pc,pc->c", lobe, weighted[block][up])
+                total += lobe @ weighted[block]
+            else:  # Schlick's F per channel: f_λ Σ s W + (1 − f_λ) Σ s m W
+                scalar, schlick = microfacet_lobe(model, n[k], v[k], directions[block])
+                total += f0 * (scalar @ weighted[block])
+                total += (1.0 - f0) * ((scalar * schlick) @ weighted[block])
         if model.name == "banks":
             total *= glossy[k] / (norm if model.normalize else 1.0)
         out[k] += total
