@@ -331,12 +331,12 @@ void main() {
         --budget;
         // What the iteration integrates, if anything: part k of a texel cut into split x split
         // parts (split 1: a whole texel accepted at level 0) over its area, or a node of level
-        // >= 1 over its radiance. One lobe_mean call takes either: llvmpipe runs
-        // every branch any of the 8 invocations it runs as one takes, so each call site (and
-        // each trigonometric function) costs every iteration.
+        // >= 1 over its radiance. One lobe_mean call takes either: llvmpipe runs every branch
+        // any of the 8 invocations it runs as one takes, so each call site (and each
+        // trigonometric function) costs every iteration.
         int split = 0;  // 0: no part
         int k = 0;
-        bool moments = false;
+        bool whole_node = false;  // a node of level >= 1, by its own three points
         vec4 w = vec4(0.0);
         if (node.z < 0) {
             int code = -1 - node.z;
@@ -353,8 +353,8 @@ void main() {
             int verdict = classify(direction.xyz, w.a, direction.a, parts);
             if (verdict == 0) continue;
             if (verdict == 1) {
-                moments = node.z > 0;
-                split = moments ? 0 : 1;
+                whole_node = node.z > 0;
+                split = whole_node ? 0 : 1;
             } else if (node.z == 0) {
                 stacks[base + top++] = ivec4(node.xy, -1 - parts, 0);
             } else {
@@ -365,9 +365,9 @@ void main() {
                 stacks[base + top++] = ivec4(child + ivec2(1, 1), node.z - 1, 0);
             }
         }
-        if (!moments && split == 0) continue;
+        if (!whole_node && split == 0) continue;
         vec3 weight = w.rgb;
-        mat3 points = moments ? node_points(node) : part_points(node.xy, split, k, weight);
+        mat3 points = whole_node ? node_points(node) : part_points(node.xy, split, k, weight);
         total += weight * lobe_mean(points);
     }
     tops[index] = top;
