@@ -214,10 +214,11 @@ class PyramidTextures:
         textures = [ctx.texture((w, h), 4, dtype="f4") for _ in range(5)]
         for texture in textures:  # allocates the chain; every level is written below
             texture.build_mipmaps(0, levels - 1)
+        # the map's mean radiance over the sphere, its largest channel (Σ W / 4π)
         top = np.asarray(pyramid.radiance[levels - 1]).reshape(3, -1).sum(axis=1)
-        self.mean_radiance = float(max(top.max(), 1e-30) / (4.0 * math.pi))
-        """The map's mean radiance over the sphere, its largest channel (Σ W / 4π)."""
-        texel_area = np.repeat(band_table(h, w)[:h, 2], w)
+        mean_radiance = max(top.max(), 1e-30) / (4.0 * math.pi)
+        bands = band_table(h, w)
+        texel_area = np.repeat(bands[:h, 2], w)
         for level, (rows, cols) in enumerate(pyramid.shapes):
             cos_rho, sin_rho = pyramid.radii[level]
             rho = (np.arctan2(sin_rho, cos_rho) * (level > 0) + texel).astype(np.float32)
@@ -225,7 +226,7 @@ class PyramidTextures:
             # acceptance shrinks by its BRIGHT_POWER
             area = texel_area if level == 0 else np.pi * rho.astype(np.float64) ** 2
             brightest = np.asarray(pyramid.radiance[level], np.float64).max(axis=0)
-            shrink = np.maximum(brightest / (area * self.mean_radiance), 1.0) ** BRIGHT_POWER
+            shrink = np.maximum(brightest / (area * mean_radiance), 1.0) ** BRIGHT_POWER
             points = node_points(pyramid.samples[level], pyramid.spreads[level])
             zeros = np.zeros_like(rho)
             planes = (
@@ -239,7 +240,7 @@ class PyramidTextures:
         for texture in textures:
             texture.filter = (moderngl.NEAREST_MIPMAP_NEAREST, moderngl.NEAREST)
         self.textures = textures
-        self.bands = ctx.buffer(band_table(h, w).tobytes())
+        self.bands = ctx.buffer(bands.tobytes())
 
     def release(self) -> None:
         for texture in self.textures:
