@@ -124,3 +124,43 @@ def test_another_views_file_in_a_views_place_is_baked_again(baked, tmp_path, cap
     shutil.copy(store.view_path(VIEW), path)
     assert _played(store, VIEW + 1) is not None
     _assert_one_note_then_healed(root, path, capsys, VIEW + 1)
+
+
+def _write_forever_ignoring_sigterm(path):
+    """A writer stuck where SIGTERM cannot end it (as in an fsync): only SIGKILL does."""
+    import signal
+    import time
+
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    path.write_bytes(b"half a view")
+    while True:
+        time.sleep(0.05)
+
+
+def test_a_stopped_bake_ends_its_child_and_leaves_no_half_written_view(
+    baked, tmp_path, monkeypatch
+):
+    import multiprocessing
+
+    from envstudio.methods.pem import orbit_job
+    from envstudio.methods.pem.orbit_job import OrbitBakeJob
+
+    root = tmp_path / "cache"
+    shutil.copytree(baked, root)
+    store = _store(root)
+    leftover = store.folder / "views" / ".view-00107.ab12cd34.pem"
+    job = OrbitBakeJob(store, "room")
+    monkeypatch.setattr(orbit_job, "JOIN_S", 0.2)
+    child = multiprocessing.get_context("fork").Process(
+        target=_write_forever_ignoring_sigterm, args=(leftover,), daemon=True
+    )
+    child.start()
+    while not leftover.exists():
+        pass
+    job._process, pid = child, child.pid
+    job.stop()
+    with pytest.raises(ProcessLookupError):  # killed after JOIN_S and reaped, not left running
+        os.kill(pid, 0)
+    assert not job.running
+    names = sorted(p.name for p in (store.folder / "views").iterdir())
+    assert names == [store.view_path(VIEW).name] and store.done() == {VIEW}

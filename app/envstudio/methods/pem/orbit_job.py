@@ -19,7 +19,7 @@ import time
 from envstudio.methods.pem.bake.orbit import OrbitStore, nearest_first
 from envstudio.scene.camera import OrbitCamera
 
-__all__ = ["FAILED_RETRY_S", "POLL_S", "RESTART_S", "OrbitBakeJob"]
+__all__ = ["FAILED_RETRY_S", "JOIN_S", "POLL_S", "RESTART_S", "OrbitBakeJob"]
 
 #: Seconds between looks at the parts folder.
 POLL_S = 0.5
@@ -27,6 +27,8 @@ POLL_S = 0.5
 RESTART_S = 2.0
 #: Seconds before a child that failed is started again.
 FAILED_RETRY_S = 30.0
+#: Seconds a stopped child has to end before it is killed.
+JOIN_S = 5.0
 
 
 def _bake_in_order(
@@ -129,8 +131,15 @@ class OrbitBakeJob:
         return (self.store.total - done) / rate
 
     def stop(self) -> None:
-        """Stop the child (its finished views are kept); safe to call twice."""
-        if self._process is not None:
-            self._process.terminate()
-            self._process.join(timeout=5.0)
-            self._process, self._ended = None, None
+        """Stop the child and wait for its end (its finished views are kept, the view it
+        was writing is removed); safe to call twice."""
+        process, self._process, self._ended = self._process, None, None
+        if process is None:
+            return
+        process.terminate()
+        process.join(JOIN_S)
+        if process.is_alive():  # SIGTERM waits while the child is in the kernel (an fsync)
+            process.kill()
+            process.join()
+        process.close()
+        self.store.discard_unfinished()

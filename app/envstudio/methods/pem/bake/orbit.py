@@ -304,6 +304,23 @@ class OrbitStore:
         names = (p.name for p in (self.folder / "views").glob("view-*.pem"))
         return {int(n[5:10]) for n in names if len(n) == 14 and n[5:10].isdigit()}
 
+    def discard_unfinished(self) -> list[Path]:
+        """Remove the temporary files of views whose writer was stopped mid-write.
+
+        :func:`~envstudio.io.atomic.atomic_path` names them ``.view-NNNNN.<random>.pem``;
+        a writer killed before its rename leaves one behind. Call it only when no
+        writer of this orbit runs (the background job calls it once its child ended).
+
+        Returns
+        -------
+        list of Path
+            The files removed.
+        """
+        removed = sorted((self.folder / "views").glob(".view-*.pem"))
+        for path in removed:
+            path.unlink(missing_ok=True)
+        return removed
+
     def _read(self, view: int) -> PemBake | None:
         """The one-view bake of ``view`` if it is there, intact and of this orbit.
 
