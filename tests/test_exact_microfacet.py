@@ -11,6 +11,7 @@ microfacet method (splitsum).
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -320,3 +321,28 @@ def test_compare_of_a_microfacet_method_against_the_exact_reference(ball, tmp_pa
     assert abs(approximation - splitsum["scene_error"]) < noise
     assert splitsum["scene_only_error"] < 0.1 * noise
     assert "(microfacet, untraced): exact" in (out / "compare.md").read_text()
+
+
+def test_the_brute_force_lobe_is_zero_without_a_warning_where_l_is_minus_v():
+    """l = −v leaves the half vector undefined (|l + v| rounds to 0): the lobe is zero there
+    (⟨n, l⟩ < 0) and no overflow reaches the terminal; elsewhere D G2 F / 4⟨n, v⟩ as written out."""
+    from envstudio.measure.exact_lobes import microfacet_lobe
+
+    rng = np.random.default_rng(3)
+    normal = np.array([0.0, 0.0, 1.0])
+    view = np.array([0.6, 0.0, 0.8])
+    others = rng.normal(size=(500, 3))
+    nearly_minus_v = -view + np.array([0.0, 0.0, 1e-9])  # ⟨v, l⟩ rounds to −1, ⟨n, l + v⟩ not 0
+    nearly_minus_v /= np.linalg.norm(nearly_minus_v)
+    directions = np.vstack([nearly_minus_v, others / np.linalg.norm(others, axis=1, keepdims=True)])
+    model = LobeModel("microfacet", (0.04, 0.04, 0.04), alpha=0.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scalar, schlick = microfacet_lobe(model, normal, view, directions)
+    assert scalar[0] == 0.0
+    half = directions[1:] + view
+    half /= np.linalg.norm(half, axis=1, keepdims=True)
+    n_dot_l = directions[1:] @ normal
+    expected = ggx.distribution(half @ normal, 0.2) * ggx.smith_g2(n_dot_l, 0.8, 0.2) / (4.0 * 0.8)
+    assert np.allclose(scalar[1:], np.where(n_dot_l > 0.0, expected, 0.0), rtol=1e-12)
+    assert np.allclose(schlick[1:], (1.0 - half @ view) ** 5, rtol=1e-12, atol=1e-15)

@@ -396,7 +396,8 @@ def microfacet_lobe(
     n_dot_v = float(views @ normals)
     # h = (l + v) / |l + v| and |l + v|² = 2 + 2 ⟨v, l⟩
     inverse = 1.0 / np.sqrt(np.maximum(2.0 + 2.0 * v_dot_l, 1e-300))
-    d = ggx.distribution(np.maximum((n_dot_l + n_dot_v) * inverse, 0.0), model.alpha)
+    # a cosine: clipped to 1 where l = −v leaves h undefined (there ⟨n, l⟩ = −⟨n, v⟩ < 0)
+    d = ggx.distribution(np.clip((n_dot_l + n_dot_v) * inverse, 0.0, 1.0), model.alpha)
     g2 = ggx.smith_g2(n_dot_l, n_dot_v, model.alpha)
     scalar = np.where(n_dot_l > 0.0, d * g2 / (4.0 * n_dot_v), 0.0)
     schlick = (1.0 - np.clip((v_dot_l + 1.0) * inverse, 0.0, 1.0)) ** 5
