@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 
 import pytest
 
@@ -155,8 +156,10 @@ def test_a_stopped_bake_ends_its_child_and_leaves_no_half_written_view(
         target=_write_forever_ignoring_sigterm, args=(leftover,), daemon=True
     )
     child.start()
+    deadline = time.monotonic() + 30.0
     while not leftover.exists():
-        pass
+        assert time.monotonic() < deadline, "the child wrote nothing in 30 s"
+        time.sleep(0.01)
     job._process, pid = child, child.pid
     job.stop()
     with pytest.raises(ProcessLookupError):  # killed after JOIN_S and reaped, not left running
