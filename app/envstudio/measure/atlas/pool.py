@@ -10,15 +10,17 @@ machines, point ``ENVSTUDIO_CACHE_DIR`` at a shared folder.
 from __future__ import annotations
 
 import multiprocessing
+import os
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from envstudio.errors import UserError
+from envstudio.io.cluster import worker_environ
 from envstudio.measure.atlas.cells import failed_rows, measure_scene_cell
 from envstudio.measure.atlas.grid import SceneCell
 
-__all__ = ["Task", "measure_task", "run_tasks"]
+__all__ = ["Task", "measure_task", "run_tasks", "worker_pool"]
 
 #: (scene, methods, grid settings, image folder).
 Task = tuple[SceneCell, list[str], dict, Path]
@@ -73,8 +75,7 @@ def run_tasks(
         for task in tasks:
             yield task, measure_task(task)
     else:
-        context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(jobs, mp_context=context) as pool:
+        with worker_pool(jobs) as pool:
             futures = {pool.submit(measure_task, task): task for task in tasks}
             try:
                 for future in as_completed(futures):
@@ -83,6 +84,20 @@ def run_tasks(
                 for future in futures:
                     future.cancel()
                 raise
+
+
+def worker_pool(jobs: int) -> ProcessPoolExecutor:
+    """``jobs`` worker processes started with ``spawn``, each with its share of llvmpipe's
+    threads (gpu.context.worker_environ) set before it makes a context."""
+    context = multiprocessing.get_context("spawn")
+    return ProcessPoolExecutor(
+        jobs, mp_context=context, initializer=_set_environ, initargs=(worker_environ(jobs),)
+    )
+
+
+def _set_environ(values: dict[str, str]) -> None:
+    """A worker's first step: ``values`` into its environment, before any context exists."""
+    os.environ.update(values)
 
 
 def _run_dask(tasks: list[Task], jobs: int, scheduler: str):
