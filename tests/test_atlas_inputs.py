@@ -212,3 +212,24 @@ def test_a_marked_cell_shows_its_mark_and_reason_and_the_summary_counts_it(tmp_p
     assert page.count(" †</a>") == 1 and f"† scene error unreliable: {reason}" in page
     assert {s["method"]: s["marked"] for s in summary(rows)} == {"mirror": 0, "kautz": 1}
     assert reason in (tmp_path / "atlas.csv").read_text()
+
+
+def test_the_default_grid_has_every_shipped_map_once_by_content():
+    """A format copy is left out by default (and named on request); it is its original's
+    radiance within RGBE's 8-bit mantissa at all but one pixel (a negative the EXR holds)."""
+    from envstudio.io.images import read_image
+    from envstudio.io.scene_file import shipped_environments
+    from envstudio.measure.atlas.grid import FORMAT_COPIES
+
+    shipped = shipped_environments()
+    grid = command.grid_from_args(namespace(out="x"))
+    assert set(grid.envs) == set(shipped) - set(FORMAT_COPIES) and len(grid.envs) == 8
+    assert command.grid_from_args(namespace(envs="studio_rgbe.hdr", out="x")).envs == (
+        "studio_rgbe.hdr",
+    )
+    for copy, original in FORMAT_COPIES.items():
+        a, b = read_image(shipped[original]), read_image(shipped[copy])
+        assert a.shape == b.shape
+        off = np.abs(a - b).max(axis=-1) / np.maximum(a.max(axis=-1), 1e-30)
+        assert np.count_nonzero(off > 2.0**-7) <= 1 and np.median(off) < 2.0**-8
+        assert abs(b.mean() / a.mean() - 1.0) < 5e-3

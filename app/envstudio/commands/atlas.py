@@ -17,7 +17,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--methods", help="comma-separated methods (default: every one but the reference)"
     )
     parser.add_argument(
-        "--envs", help="shipped environment names or .exr/.hdr files (default: all shipped)"
+        "--envs",
+        help="shipped environment names or .exr/.hdr files (default: all shipped but "
+        "studio_rgbe.hdr, the studio map stored as RGBE)",
     )
     parser.add_argument(
         "--meshes",
@@ -102,16 +104,15 @@ def grid_from_args(args: argparse.Namespace):
         The first bad option, in one line.
     """
     from envstudio.engine.registry import available_methods, ground_truth_class
-    from envstudio.io.scene_file import shipped_environments
     from envstudio.io.scene_setup import parse_size
-    from envstudio.measure.atlas.grid import AtlasGrid
+    from envstudio.measure.atlas.grid import AtlasGrid, default_envs
     from envstudio.measure.atlas.validate import check_grid
 
     truth = ground_truth_class().name
     methods = _names(args.methods, "--methods") or [n for n in available_methods() if n != truth]
     grid = AtlasGrid(
         methods=tuple(methods),
-        envs=tuple(_names(args.envs, "--envs") or shipped_environments()),
+        envs=tuple(_names(args.envs, "--envs") or default_envs()),
         meshes=tuple(_names(args.meshes, "--meshes")),
         exponents=tuple(_numbers(args.exponents, "--exponents")),
         kds=tuple(_numbers(args.kd, "--kd")),
