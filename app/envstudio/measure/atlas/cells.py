@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.io.meshes import load_mesh
 from envstudio.io.scene_file import shipped_environments
 from envstudio.io.scene_setup import build_scene, replace_reflector
 from envstudio.measure.atlas.grid import SceneCell
 from envstudio.measure.atlas.memory import gpu_bytes
+from envstudio.measure.atlas.sessions import KEPT
 from envstudio.measure.compare import method_classes, plan_parameters, run_comparison
 from envstudio.measure.report import write_report
 from envstudio.resources import asset_root
@@ -67,7 +67,6 @@ def measure_scene_cell(
     methods: list[str],
     settings: dict,
     folder: Path,
-    ctx=None,
 ) -> list[dict]:
     """Measure ``methods`` in ``cell``'s scene and write compare's report into ``folder``.
 
@@ -81,8 +80,6 @@ def measure_scene_cell(
         The grid's settings (AtlasGrid.settings).
     folder
         Where the images, heat maps and compare.json go (made if missing).
-    ctx
-        A moderngl context, else the session makes one.
 
     Returns
     -------
@@ -100,7 +97,8 @@ def measure_scene_cell(
     classes = method_classes(names)
     assignments = [*settings["params"], f"phong_exponent={cell.exponent:g}", f"kd={cell.kd:g}"]
     plan = plan_parameters(classes, assignments)
-    session = RenderSession(cell_scene(cell, settings["cameras"]), ctx=ctx)
+    # the session of the scene before where the environment is the same (sessions.py)
+    session = KEPT.session_for(cell_scene(cell, settings["cameras"]))
     try:
         comparison = run_comparison(
             session,
@@ -115,8 +113,9 @@ def measure_scene_cell(
             reference_kind=settings["reference"],
         )
         memory = {name: gpu_bytes(session.method(name)) for name in names}
-    finally:
-        session.release()
+    except BaseException:
+        KEPT.release()  # a scene that failed midway hands nothing on to the next
+        raise
     folder.mkdir(parents=True, exist_ok=True)
     write_report(comparison, folder)
     results = {r.name: r for r in comparison.results}

@@ -1,7 +1,8 @@
 """Run the atlas's scenes: here, in worker processes, or on a Dask cluster.
 
 Each worker renders in its own headless EGL context (a process each, started
-with ``spawn``: no fork after a context or Embree exists). References are
+with ``spawn``: no fork after a context or Embree exists), kept from one scene
+to the next of the same environment (sessions.py). References are
 cached by content in ``$ENVSTUDIO_CACHE_DIR`` (measure.ground_truth_cache),
 where every worker of one machine reaches them; on a cluster of several
 machines, point ``ENVSTUDIO_CACHE_DIR`` at a shared folder.
@@ -19,6 +20,7 @@ from envstudio.errors import UserError
 from envstudio.io.cluster import worker_environ
 from envstudio.measure.atlas.cells import failed_rows, measure_scene_cell
 from envstudio.measure.atlas.grid import SceneCell
+from envstudio.measure.atlas.sessions import release_kept
 
 __all__ = ["Task", "measure_task", "run_tasks", "worker_pool"]
 
@@ -72,8 +74,11 @@ def run_tasks(
     if scheduler is not None:
         yield from _run_dask(tasks, jobs, scheduler)
     elif jobs <= 1:
-        for task in tasks:
-            yield task, measure_task(task)
+        try:
+            for task in tasks:
+                yield task, measure_task(task)
+        finally:
+            release_kept()
     else:
         with worker_pool(jobs) as pool:
             futures = {pool.submit(measure_task, task): task for task in tasks}
@@ -114,6 +119,8 @@ def _run_dask(tasks: list[Task], jobs: int, scheduler: str):
         except BaseException:
             client.cancel(list(futures))
             raise
+        finally:
+            client.run(release_kept)  # the workers' kept sessions, on a cluster that stays
     finally:
         client.close()
         if cluster is not None:
