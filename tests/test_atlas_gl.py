@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from envstudio.cli import main
+from envstudio.measure import exact_lobes
 from envstudio.measure.atlas import pool, sessions
 from envstudio.measure.atlas.grid import AtlasGrid
 from envstudio.measure.atlas.page import pareto_front
@@ -93,21 +94,32 @@ def test_an_interrupted_atlas_measures_only_the_rest(tmp_path, monkeypatch):
     assert first.read_text() == kept
 
 
-def test_scenes_of_one_map_share_a_session_and_measure_what_fresh_ones_do(tmp_path):
-    """Methods with state derived from the map alone (parallax's Phong chain) built
-    for the first scene serve the next: the numbers are a fresh session's, cell by cell."""
-    g = grid(methods=("mirror", "parallax"), meshes=("sphere", "knot"))
+def test_scenes_of_one_map_share_a_session_and_measure_what_fresh_ones_do(tmp_path, monkeypatch):
+    """What is derived from the map alone (Banks' 3D map, the pyramid of its
+    exact reference) is built for the first scene and serves the next: the numbers are a
+    fresh session's, cell by cell."""
+    pyramids = []
+
+    class Counted(exact_lobes.PyramidTextures):
+        def __init__(self, *args):
+            pyramids.append(args)
+            super().__init__(*args)
+
+    monkeypatch.setattr(exact_lobes, "PyramidTextures", Counted)
+    g = grid(methods=("mirror", "banks"), meshes=("sphere", "knot"))
     made = sessions.KEPT.made
+    monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path / "cache"))  # nothing read back
     shared = run_atlas(g, tmp_path / "shared").rows
-    assert sessions.KEPT.made == made + 1
-    for mesh in g.meshes:  # each scene alone: run_atlas releases the kept session after it
-        fresh = run_atlas(grid(methods=g.methods, meshes=(mesh,)), tmp_path / mesh).rows
-        assert sessions.KEPT.made == made + 2 + g.meshes.index(mesh)
-        for row in fresh:
-            twin = next(r for r in shared if (r["mesh"], r["method"]) == (mesh, row["method"]))
-            assert [twin[k] for k in (*NUMBERS, "gpu_bytes")] == [
-                row[k] for k in (*NUMBERS, "gpu_bytes")
-            ]
+    assert sessions.KEPT.made == made + 1 and len(pyramids) == 1
+    # the second scene alone, in a session of its own (run_atlas released the kept one)
+    monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path / "cache-alone"))
+    fresh = run_atlas(grid(methods=g.methods, meshes=("knot",)), tmp_path / "alone").rows
+    assert sessions.KEPT.made == made + 2 and len(pyramids) == 2
+    for row in fresh:
+        twin = next(r for r in shared if (r["mesh"], r["method"]) == ("knot", row["method"]))
+        assert [twin[k] for k in (*NUMBERS, "gpu_bytes")] == [
+            row[k] for k in (*NUMBERS, "gpu_bytes")
+        ]
 
 
 def test_the_page_loads_in_chromium_with_every_image_and_the_chart(tmp_path):

@@ -62,6 +62,7 @@ from envstudio.engine.session import RenderSession
 from envstudio.errors import ParameterError
 from envstudio.gpu.context import describe
 from envstudio.measure.bench import run_bench
+from envstudio.measure.exact_lobes import LobeEvaluator
 from envstudio.measure.exact_reference import EXACT_MODELS
 from envstudio.measure.ground_truth import (
     SCENE_EFFECTS,
@@ -341,6 +342,7 @@ def run_comparison(
     ssaa: int = 1,
     decompose: bool = True,
     reference_kind: str = EXACT,
+    lobes: LobeEvaluator | None = None,
 ) -> Comparison:
     """Render ``names`` and the reference at the session's camera and compare them.
 
@@ -385,6 +387,10 @@ def run_comparison(
         not trace, as the approximation column's when it does (the traced one stays Monte
         Carlo); another model is Monte Carlo with a one-line note. :data:`MONTE_CARLO`:
         Monte Carlo throughout.
+    lobes
+        The GPU evaluation of the glossy lobes the exact references use, kept by the caller
+        with its environment's pyramid from one comparison to the next (None: one made and
+        freed per reference).
 
     Raises
     ------
@@ -431,13 +437,15 @@ def run_comparison(
             )
         background = next((rendered[n][2] for n in members if n in rendered), None)
         if exact and not traces:  # the untraced model is the reference: nothing to sample
-            runs[model], masks[model] = exact_run(session, reference, size, ssaa, background, cache)
+            runs[model], masks[model] = exact_run(
+                session, reference, size, ssaa, background, cache, lobes
+            )
             if untraced_is_traced:
                 untraced[model] = _as_untraced(runs[model])
             continue
         judge = ReferenceJudge(rule, {name: rendered[name][2] for name in members})
         if exact and traces:  # a control variate: traced = exact untraced + sampled difference
-            known, known_mask = exact_run(session, reference, size, ssaa, background, cache)
+            known, known_mask = exact_run(session, reference, size, ssaa, background, cache, lobes)
             reference.values[UNTRACED_TOO] = True
             runs[model], masks[model] = converge(
                 session, reference, size, progress, False, judge, control=(known.hdr, known_mask)

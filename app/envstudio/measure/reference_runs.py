@@ -370,11 +370,13 @@ def exact_run(
     ssaa: int,
     background: npt.NDArray[np.float32] | None,
     cache: bool = False,
+    lobes: LobeEvaluator | None = None,
 ) -> tuple[ReferenceRun, npt.NDArray[np.bool_]]:
     """The untraced model evaluated exactly at ``ssaa``² samples a pixel (exact_reference.py),
     as a run, and its mask; off the reflectors ``background`` (a method's frame) or black.
     With ``cache``, a frame of the same inputs evaluated before is read back
-    (measure/exact_cache.py) and a new one kept.
+    (measure/exact_cache.py) and a new one kept. ``lobes``: the caller's GPU evaluation of
+    the glossy lobes (its pyramid kept between runs), else one made and freed here.
 
     Raises
     ------
@@ -396,11 +398,14 @@ def exact_run(
     frame = load_frame(path) if path is not None else None
     saved = frame is not None
     if not saved:
-        lobes = LobeEvaluator(session.ctx, session.programs)
+        own = LobeEvaluator(session.ctx, session.programs) if lobes is None else None
         try:
-            frame = exact_frame(normals, views, radiance, values, ssaa, started, lobes, tangents)
+            frame = exact_frame(
+                normals, views, radiance, values, ssaa, started, lobes or own, tangents
+            )
         finally:
-            lobes.release()
+            if own is not None:
+                own.release()
         if path is not None:
             save_frame(path, frame)
     if not frame.mask.any():

@@ -111,6 +111,7 @@ def measure_scene_cell(
             time_limit_s=settings["time_limit"],
             ssaa=settings["ssaa"],
             reference_kind=settings["reference"],
+            lobes=KEPT.lobes,
         )
         memory = {name: gpu_bytes(session.method(name)) for name in names}
     except BaseException:

@@ -4,9 +4,10 @@ Scenes of one environment differ in their reflector, camera and glossiness only,
 the methods derive from the environment alone (parallax's Phong chain, Banks' 3D map,
 Kautz's mip chain, the scene's cube map and SH9) is keyed by the environment's revision
 (shading.gpu_scene), as when the viewer swaps the reflector: kept, those are built once per
-environment and worker instead of once per scene. Every method's and the display's values
-go back to a fresh session's (RenderSession.reset_values) before each scene, so a cell
-measures what a fresh session would.
+environment and worker instead of once per scene, and so is the pyramid the exact
+references' glossy lobes descend (:attr:`KeptSession.lobes`). Every method's and the
+display's values go back to a fresh session's (RenderSession.reset_values) before each
+scene, so a cell measures what a fresh session would.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from envstudio.engine.session import RenderSession
+from envstudio.measure.exact_lobes import LobeEvaluator
 from envstudio.scene.graph import Scene
 
 __all__ = ["KEPT", "KeptSession", "release_kept"]
@@ -24,7 +26,18 @@ class KeptSession:
 
     def __init__(self) -> None:
         self._session: RenderSession | None = None
+        self._lobes: LobeEvaluator | None = None
         self.made = 0  # sessions made: one per environment run, for the tests
+
+    @property
+    def lobes(self) -> LobeEvaluator:
+        """The kept session's evaluation of the exact references' glossy lobes (made on first
+        use), whose pyramid serves every scene of the environment."""
+        if self._session is None:
+            raise RuntimeError("no kept session")
+        if self._lobes is None:
+            self._lobes = LobeEvaluator(self._session.ctx, self._session.programs)
+        return self._lobes
 
     def session_for(self, scene: Scene) -> RenderSession:
         """A session showing ``scene``: the kept one with ``scene``'s reflectors and camera
@@ -44,6 +57,9 @@ class KeptSession:
 
     def release(self) -> None:
         """Free the kept session (its GPU resources and context); safe twice."""
+        if self._lobes is not None:
+            self._lobes.release()
+            self._lobes = None
         if self._session is not None:
             self._session.release()
             self._session = None
