@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from envstudio.cli import main
+from envstudio.io.images import read_image, write_image
 from envstudio.measure import exact_lobes
 from envstudio.measure.atlas import pool, sessions
 from envstudio.measure.atlas.grid import AtlasGrid
@@ -106,14 +107,18 @@ def test_scenes_of_one_map_share_a_session_and_measure_what_fresh_ones_do(tmp_pa
             super().__init__(*args)
 
     monkeypatch.setattr(exact_lobes, "PyramidTextures", Counted)
-    g = grid(methods=("mirror", "banks"), meshes=("sphere", "knot"))
+    sunset = read_image(asset_root() / "hdr" / "sunset.exr")  # 8 x 8 texels to one: quick checks
+    small = sunset.reshape(64, 8, 128, 8, 3).mean(axis=(1, 3))
+    env = str(write_image(tmp_path / "small.exr", small))
+    g = grid(methods=("mirror", "banks"), envs=(env,), meshes=("sphere", "knot"))
     made = sessions.KEPT.made
     monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path / "cache"))  # nothing read back
     shared = run_atlas(g, tmp_path / "shared").rows
     assert sessions.KEPT.made == made + 1 and len(pyramids) == 1
     # the second scene alone, in a session of its own (run_atlas released the kept one)
     monkeypatch.setenv("ENVSTUDIO_CACHE_DIR", str(tmp_path / "cache-alone"))
-    fresh = run_atlas(grid(methods=g.methods, meshes=("knot",)), tmp_path / "alone").rows
+    fresh = run_atlas(grid(methods=g.methods, envs=(env,), meshes=("knot",)), tmp_path / "alone")
+    fresh = fresh.rows
     assert sessions.KEPT.made == made + 2 and len(pyramids) == 2
     for row in fresh:
         twin = next(r for r in shared if (r["mesh"], r["method"]) == ("knot", row["method"]))
