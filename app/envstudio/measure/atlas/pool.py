@@ -10,6 +10,7 @@ machines, point ``ENVSTUDIO_CACHE_DIR`` at a shared folder.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 from collections.abc import Iterator
@@ -93,7 +94,7 @@ def run_tasks(
 
 def worker_pool(jobs: int) -> ProcessPoolExecutor:
     """``jobs`` worker processes started with ``spawn``, each with its share of llvmpipe's
-    threads (gpu.context.worker_environ) set before it makes a context."""
+    threads (io.cluster.worker_environ) set before it makes a context."""
     context = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(
         jobs, mp_context=context, initializer=_set_environ, initargs=(worker_environ(jobs),)
@@ -119,8 +120,9 @@ def _run_dask(tasks: list[Task], jobs: int, scheduler: str):
         except BaseException:
             client.cancel(list(futures))
             raise
-        finally:
-            client.run(release_kept)  # the workers' kept sessions, on a cluster that stays
+        finally:  # the workers' kept sessions, on a cluster that stays; a lost worker's
+            with contextlib.suppress(Exception):  # error must not hide the run's own
+                client.run(release_kept)
     finally:
         client.close()
         if cluster is not None:

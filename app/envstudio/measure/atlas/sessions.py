@@ -66,8 +66,9 @@ class KeptSession:
 
 
 def _same_environment(shown: Scene, wanted: Scene) -> bool:
-    """Whether two scenes light their reflectors with the same map: equal radiance pixels and
-    the same local objects (none, in the atlas's scenes)."""
+    """Whether a kept session may show ``wanted``: equal radiance pixels, and neither scene
+    with local objects (a capture of them would depend on the reflector; the atlas's
+    scenes have none)."""
     a, b = shown.environment.radiance, wanted.environment.radiance
     return (
         a.shape == b.shape
